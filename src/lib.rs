@@ -1,0 +1,4 @@
+//! plyshell: nonlinear shell finite elements for layered protective garments.
+
+pub mod element;
+pub mod material;
