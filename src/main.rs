@@ -1,1 +1,135 @@
-fn main() {}
+//! Command line: `plyshell solve`, `plyshell demo`, `plyshell check`, `plyshell bench`.
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+use indicatif::{ProgressBar, ProgressStyle};
+
+use plyshell::analysis::{self, RunError, RunOptions};
+use plyshell::scene::{self, Scene};
+use plyshell::solver::Progress;
+use plyshell::{bench, scene::BuiltScene};
+
+/// The bundled default scene solved by `plyshell demo`.
+const DEMO_SCENE: &str = include_str!("../garments/demo.ron");
+
+#[derive(Parser)]
+#[command(name = "plyshell", version, about = "Nonlinear shell finite elements for layered protective garments")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Solve a scene file and write VTU/PVD, summary.json and plots into DIR.
+    Solve {
+        /// Scene file (RON).
+        scene: PathBuf,
+        /// Output directory.
+        #[arg(long, default_value = "out")]
+        out: PathBuf,
+        /// No progress bar.
+        #[arg(long)]
+        quiet: bool,
+    },
+    /// Solve the bundled default scene (a strip rolled into a full circle).
+    Demo {
+        /// Output directory.
+        #[arg(long, default_value = "out/demo")]
+        out: PathBuf,
+    },
+    /// Parse and build a scene without solving; print its sizes and mesh quality.
+    Check {
+        /// Scene file (RON).
+        scene: PathBuf,
+    },
+    /// Run the verification benchmarks at several mesh sizes: table, JSON and error-vs-time plot.
+    Bench {
+        /// Write the records as JSON here (the plot goes beside it as .svg).
+        #[arg(long, default_value = "bench.json")]
+        json: PathBuf,
+        /// Only the smallest meshes (a quick look).
+        #[arg(long)]
+        quick: bool,
+    },
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Solve { scene, out, quiet } => scene::load(&scene)
+            .map_err(|e| e.to_string())
+            .and_then(|(s, b)| solve(&s, &b, &out, quiet)),
+        Command::Demo { out } => scene::parse("garments/demo.ron (bundled)", DEMO_SCENE)
+            .and_then(|s| scene::build(&s, "garments/demo.ron (bundled)", DEMO_SCENE).map(|b| (s, b)))
+            .map_err(|e| e.to_string())
+            .and_then(|(s, b)| solve(&s, &b, &out, false)),
+        Command::Check { scene } => scene::load(&scene).map_err(|e| e.to_string()).map(|(s, b)| check(&s, &b)),
+        Command::Bench { json, quick } => bench::run_all(&json, quick).map_err(|e| e.to_string()),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn check(scene: &Scene, built: &BuiltScene) {
+    let m = &built.model;
+    println!("scene '{}': {} parts, {} nodes, {} elements, {} free DOFs", scene.name, m.parts.len(), m.n_nodes(), m.elements.len(), m.dofs.n_free);
+    for (name, q) in &built.quality {
+        println!(
+            "  part {name}: angles {:.1}°..{:.1}°, max aspect {:.2}, min Jacobian ratio {:.3}",
+            q.min_angle_deg, q.max_angle_deg, q.max_aspect_ratio, q.min_jacobian_ratio
+        );
+    }
+}
+
+fn solve(scene: &Scene, built: &BuiltScene, out: &Path, quiet: bool) -> Result<(), String> {
+    check(scene, built);
+    let bar = if quiet { ProgressBar::hidden() } else { ProgressBar::new(1000) };
+    bar.set_style(
+        ProgressStyle::with_template("{elapsed_precise} [{bar:30}] {percent:>3}% {msg}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar())
+            .progress_chars("=> "),
+    );
+    let names: Vec<String> = built.steps.iter().map(|s| s.name.clone()).collect();
+    let mut progress = |p: &Progress| {
+        bar.set_position((p.fraction * 1000.0) as u64);
+        bar.set_message(format!("step {} '{}' iter {} residual {:.2e}", p.step + 1, names.get(p.step).map(String::as_str).unwrap_or(""), p.iteration, p.residual));
+    };
+    let options = RunOptions { out_dir: Some(out.to_path_buf()) };
+    let result = analysis::run(scene, built, &options, &mut progress);
+    bar.finish_and_clear();
+    match result {
+        Ok(s) => {
+            println!(
+                "solved in {:.2} s ({} increments, {} Newton iterations; assembly {:.2} s, factorization {:.2} s, solve {:.2} s)",
+                s.wall_s,
+                s.increments.len(),
+                s.newton_iterations,
+                s.timings.assembly,
+                s.timings.factorization,
+                s.timings.solve
+            );
+            for h in &s.monitors {
+                if let Some(last) = h.values.last() {
+                    let vals: Vec<String> = h.quantities.iter().zip(last).map(|(q, v)| format!("{q} = {v:.6e}")).collect();
+                    println!("  {} (node {}): {}", h.name, h.node, vals.join(", "));
+                }
+            }
+            println!("results in {}: {}", out.display(), s.files.join(", "));
+            Ok(())
+        }
+        Err(RunError::Solve { error, summary }) => Err(format!(
+            "{error}\nthe last converged state and summary.json are in {} ({})",
+            out.display(),
+            summary.files.join(", ")
+        )),
+        Err(e) => Err(e.to_string()),
+    }
+}

@@ -1,0 +1,155 @@
+//! One analysis run: scene → model → solver → results → export.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use crate::io::export::{write_state_vtu, ExportOptions};
+use crate::io::{plot, pvd};
+use crate::results::{peak_memory_mib, MonitorHistory, Sizes, Summary};
+use crate::scene::{BuiltScene, Scene};
+use crate::solver::{Progress, SolveError, Solver};
+
+/// Why a run stopped early.
+#[derive(Debug)]
+pub enum RunError {
+    /// The solver could not be set up (e.g. a singular pattern).
+    Setup(String),
+    /// The solve diverged; the last converged state was exported.
+    Solve { error: SolveError, summary: Box<Summary> },
+    /// An output file could not be written.
+    Io(String),
+}
+
+impl std::fmt::Display for RunError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            RunError::Setup(s) => write!(f, "cannot set up the solve: {s}"),
+            RunError::Solve { error, .. } => write!(f, "{error}; the last converged state was exported"),
+            RunError::Io(s) => write!(f, "cannot write results: {s}"),
+        }
+    }
+}
+
+impl std::error::Error for RunError {}
+
+/// Where and how to write results.
+#[derive(Clone, Debug, Default)]
+pub struct RunOptions {
+    /// Output directory; None runs without writing files.
+    pub out_dir: Option<PathBuf>,
+}
+
+/// Solves `built` (from `scene`), reporting progress, and writes VTU/PVD, summary.json and
+/// the monitor plot into the output directory.
+pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &mut dyn FnMut(&Progress)) -> Result<Summary, RunError> {
+    let t0 = Instant::now();
+    let model = &built.model;
+    let mut solver = Solver::new(model, scene.solver.clone()).map_err(RunError::Setup)?;
+    let (dofs, tangent_nnz, factor_nnz) = solver.sizes();
+    let mut summary = Summary {
+        scene: scene.name.clone(),
+        sizes: Sizes { nodes: model.n_nodes(), elements: model.elements.len(), dofs, tangent_nnz, factor_nnz },
+        loads: model.loads.iter().map(|l| l.name.clone()).collect(),
+        monitors: built.monitors.iter().map(|m| MonitorHistory::new(m, model)).collect(),
+        ..Default::default()
+    };
+    if let Some(dir) = &options.out_dir {
+        std::fs::create_dir_all(dir).map_err(|e| RunError::Io(format!("{}: {e}", dir.display())))?;
+    }
+    let export = ExportOptions { binary: scene.output.binary };
+    let mut pvd_entries: Vec<(f64, String)> = Vec::new();
+    let mut export_s = 0.0;
+    let mut io_error: Option<String> = None;
+    let mut state = model.initial_state();
+    let steps = &built.steps;
+    let every = scene.output.every.max(1);
+    let result = solver.run(
+        steps,
+        &mut state,
+        &mut |report, st, _| {
+            for (h, m) in summary.monitors.iter_mut().zip(&built.monitors) {
+                h.record(m, model, st);
+            }
+            summary.newton_iterations += report.iterations;
+            let last_of_step = report.increment == steps[report.step].increments;
+            if let (Some(dir), true) = (&options.out_dir, scene.output.vtu && (report.increment % every == 0 || last_of_step)) {
+                let t = Instant::now();
+                let name = format!("{}_{:04}.vtu", scene.name, pvd_entries.len() + 1);
+                match write_state_vtu(&dir.join(&name), model, st, &export) {
+                    Ok(()) => pvd_entries.push((report.time, name)),
+                    Err(e) => io_error = io_error.take().or(Some(e.to_string())),
+                }
+                export_s += t.elapsed().as_secs_f64();
+            }
+            summary.increments.push(report.clone());
+        },
+        progress,
+    );
+    summary.timings = solver.timings.clone();
+    if let Some(e) = io_error {
+        return Err(RunError::Io(e));
+    }
+    let status = match &result {
+        Ok(()) => "completed".to_string(),
+        Err(e) => format!("failed: {e}"),
+    };
+    summary.status = status;
+    if let Some(dir) = &options.out_dir {
+        let t = Instant::now();
+        if let Err(e) = &result {
+            // Leave the last converged state for inspection.
+            let name = format!("{}_last_converged.vtu", scene.name);
+            write_state_vtu(&dir.join(&name), model, &state, &export).map_err(|e| RunError::Io(e.to_string()))?;
+            pvd_entries.push((e.last_converged_time, name));
+        }
+        let pvd_name = format!("{}.pvd", scene.name);
+        pvd::write_pvd(&dir.join(&pvd_name), &pvd_entries).map_err(|e| RunError::Io(e.to_string()))?;
+        summary.files = pvd_entries.iter().map(|e| e.1.clone()).collect();
+        summary.files.push(pvd_name);
+        if let Some(name) = write_monitor_plot(dir, scene, built, &summary).map_err(RunError::Io)? {
+            summary.files.push(name);
+        }
+        summary.files.push("summary.json".into());
+        export_s += t.elapsed().as_secs_f64();
+    }
+    summary.export_s = export_s;
+    summary.wall_s = t0.elapsed().as_secs_f64();
+    summary.peak_memory_mib = peak_memory_mib();
+    if let Some(dir) = &options.out_dir {
+        let json = serde_json::to_vec_pretty(&summary).map_err(|e| RunError::Io(e.to_string()))?;
+        crate::io::atomic::write_atomic(&dir.join("summary.json"), &json).map_err(|e| RunError::Io(e.to_string()))?;
+    }
+    match result {
+        Ok(()) => Ok(summary),
+        Err(error) => Err(RunError::Solve { error, summary: Box::new(summary) }),
+    }
+}
+
+/// The load pattern the monitor plot uses on its x axis.
+pub fn plot_load(scene: &Scene, built: &BuiltScene) -> Option<usize> {
+    if let Some(name) = &scene.output.plot_against {
+        return built.model.load_index(name);
+    }
+    let last = built.steps.last()?;
+    last.target_scales.iter().position(|&s| s != 0.0)
+}
+
+/// Plots every monitored quantity against the chosen load scale (SVG).
+fn write_monitor_plot(dir: &Path, scene: &Scene, built: &BuiltScene, summary: &Summary) -> Result<Option<String>, String> {
+    let Some(li) = plot_load(scene, built) else { return Ok(None) };
+    if summary.increments.is_empty() || summary.monitors.is_empty() {
+        return Ok(None);
+    }
+    let mut series = Vec::new();
+    for h in &summary.monitors {
+        for (k, q) in h.quantities.iter().enumerate() {
+            let mut points = vec![(0.0, 0.0)];
+            points.extend(summary.increments.iter().zip(&h.values).map(|(inc, v)| (inc.scales[li], v[k])));
+            series.push(plot::Series { name: format!("{} {}", h.name, q), points, reference: false });
+        }
+    }
+    let name = format!("{}_monitors.svg", scene.name);
+    let x_label = format!("load scale '{}'", built.model.loads[li].name);
+    plot::plot_xy(&dir.join(&name), &scene.name, &x_label, "displacement", &series, false, false).map_err(|e| e.to_string())?;
+    Ok(Some(name))
+}

@@ -1,0 +1,176 @@
+//! Global assembly: the sparsity pattern is built once, values are scattered many times.
+//!
+//! Element residuals and tangents are computed in parallel (rayon) chunk by chunk; each
+//! element keeps a precomputed map from its 20×20 entries to slots of the upper triangle of
+//! the CSC matrix, so a Newton iteration only zeroes and adds values (fenris style).
+
+use std::time::Instant;
+
+use rayon::prelude::*;
+
+use crate::element::{ElementFailure, ElementOutput, ELEMENT_DOFS, NODE_DOFS};
+use crate::model::{Model, State, FIXED};
+
+const NO_SLOT: u32 = u32::MAX;
+const CHUNK: usize = 2048;
+
+/// Upper-triangular CSC pattern of the free-DOF tangent.
+#[derive(Clone, Debug)]
+pub struct Pattern {
+    /// Number of equations.
+    pub n: usize,
+    /// Column pointers (n + 1).
+    pub col_ptr: Vec<usize>,
+    /// Row indices, sorted within each column, row ≤ column.
+    pub row_idx: Vec<usize>,
+}
+
+/// An element failure located in the model.
+#[derive(Clone, Debug)]
+pub struct AssemblyFailure {
+    /// Global element index.
+    pub element: usize,
+    /// What went wrong.
+    pub failure: ElementFailure,
+}
+
+/// Pattern, scatter maps and scratch for assembling one model.
+#[derive(Debug)]
+pub struct Assembler {
+    /// Sparsity pattern of the free-DOF tangent (upper triangle).
+    pub pattern: Pattern,
+    slots: Vec<[u32; ELEMENT_DOFS * ELEMENT_DOFS]>,
+}
+
+/// What one assembly produced besides the matrix values.
+#[derive(Clone, Debug, Default)]
+pub struct AssemblyInfo {
+    /// Total strain energy.
+    pub energy: f64,
+    /// Wall time spent (s).
+    pub seconds: f64,
+}
+
+impl Assembler {
+    /// Builds the pattern and the element scatter maps of `model`.
+    pub fn new(model: &Model) -> Self {
+        let n_nodes = model.n_nodes();
+        let eq = &model.dofs.eq;
+        // Node adjacency through elements.
+        let mut adj: Vec<Vec<usize>> = vec![Vec::new(); n_nodes];
+        for el in &model.elements {
+            for &a in &el.nodes {
+                adj[a].extend_from_slice(&el.nodes);
+            }
+        }
+        let mut cols: Vec<Vec<usize>> = vec![Vec::new(); model.dofs.n_free];
+        for (b, nb) in adj.iter_mut().enumerate() {
+            nb.sort_unstable();
+            nb.dedup();
+            for kb in 0..NODE_DOFS {
+                let c = eq[NODE_DOFS * b + kb];
+                if c == FIXED {
+                    continue;
+                }
+                for &a in nb.iter() {
+                    for ka in 0..NODE_DOFS {
+                        let r = eq[NODE_DOFS * a + ka];
+                        if r != FIXED && r <= c {
+                            cols[c].push(r);
+                        }
+                    }
+                }
+            }
+        }
+        let mut col_ptr = Vec::with_capacity(cols.len() + 1);
+        let mut row_idx = Vec::new();
+        col_ptr.push(0);
+        for c in cols.iter_mut() {
+            c.sort_unstable();
+            c.dedup();
+            row_idx.extend_from_slice(c);
+            col_ptr.push(row_idx.len());
+        }
+        let pattern = Pattern { n: model.dofs.n_free, col_ptr, row_idx };
+        let slots = model
+            .elements
+            .par_iter()
+            .map(|el| {
+                let mut s = [NO_SLOT; ELEMENT_DOFS * ELEMENT_DOFS];
+                let eqs: [usize; ELEMENT_DOFS] = std::array::from_fn(|i| eq[NODE_DOFS * el.nodes[i / NODE_DOFS] + i % NODE_DOFS]);
+                for i in 0..ELEMENT_DOFS {
+                    for j in 0..ELEMENT_DOFS {
+                        let (r, c) = (eqs[i], eqs[j]);
+                        if r == FIXED || c == FIXED || r > c {
+                            continue;
+                        }
+                        let rows = &pattern.row_idx[pattern.col_ptr[c]..pattern.col_ptr[c + 1]];
+                        if let Ok(p) = rows.binary_search(&r) {
+                            s[i * ELEMENT_DOFS + j] = (pattern.col_ptr[c] + p) as u32;
+                        }
+                    }
+                }
+                s
+            })
+            .collect();
+        Self { pattern, slots }
+    }
+
+    /// Number of stored entries of the upper triangle.
+    pub fn nnz(&self) -> usize {
+        self.pattern.row_idx.len()
+    }
+
+    /// Assembles the internal force over all DOFs into `f_int` and, when `values` is given,
+    /// the tangent's upper triangle into `values` (both overwritten).
+    pub fn assemble(
+        &self,
+        model: &Model,
+        state: &State,
+        f_int: &mut [f64],
+        mut values: Option<&mut [f64]>,
+    ) -> Result<AssemblyInfo, AssemblyFailure> {
+        let t0 = Instant::now();
+        let with_tangent = values.is_some();
+        f_int.iter_mut().for_each(|v| *v = 0.0);
+        if let Some(v) = values.as_deref_mut() {
+            v.iter_mut().for_each(|x| *x = 0.0);
+        }
+        let mut energy = 0.0;
+        let n_el = model.elements.len();
+        let mut start = 0;
+        while start < n_el {
+            let end = (start + CHUNK).min(n_el);
+            let outputs: Vec<Result<ElementOutput, AssemblyFailure>> = (start..end)
+                .into_par_iter()
+                .map(|e| {
+                    let def = &model.elements[e];
+                    let x = def.nodes.map(|n| state.u[n]);
+                    let frames = def.nodes.map(|n| state.frames[n]);
+                    model.element(e).response(&x, &frames, with_tangent).map_err(|failure| AssemblyFailure { element: e, failure })
+                })
+                .collect();
+            for (e, out) in (start..end).zip(outputs) {
+                let out = out?;
+                energy += out.energy;
+                let nodes = model.elements[e].nodes;
+                for i in 0..ELEMENT_DOFS {
+                    f_int[NODE_DOFS * nodes[i / NODE_DOFS] + i % NODE_DOFS] += out.force[i];
+                }
+                if let (Some(v), Some(k)) = (values.as_deref_mut(), out.stiffness.as_ref()) {
+                    let slots = &self.slots[e];
+                    for j in 0..ELEMENT_DOFS {
+                        for i in 0..ELEMENT_DOFS {
+                            let s = slots[i * ELEMENT_DOFS + j];
+                            if s != NO_SLOT {
+                                v[s as usize] += k[(i, j)];
+                            }
+                        }
+                    }
+                }
+            }
+            start = end;
+        }
+        Ok(AssemblyInfo { energy, seconds: t0.elapsed().as_secs_f64() })
+    }
+}

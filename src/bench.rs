@@ -1,0 +1,339 @@
+//! Verification benchmarks: each runs a bundled scene at a chosen mesh and compares with
+//! its published or analytic reference. Used by `plyshell bench` and by the tests.
+
+use std::path::Path;
+use std::time::Instant;
+
+use serde::Serialize;
+
+use crate::analysis::{self, RunOptions};
+use crate::io::plot::{plot_xy, Series};
+use crate::results::Summary;
+use crate::scene;
+
+/// Bundled benchmark scenes.
+pub mod scenes {
+    /// Sze et al. (2004) §3.2 end-moment cantilever.
+    pub const END_MOMENT: &str = include_str!("../garments/benchmarks/cantilever_end_moment.ron");
+    /// Sze et al. (2004) §3.1 end-shear cantilever.
+    pub const END_SHEAR: &str = include_str!("../garments/benchmarks/cantilever_end_shear.ron");
+    /// Sze et al. (2004) §3.3 slit annular plate.
+    pub const SLIT_ANNULUS: &str = include_str!("../garments/benchmarks/slit_annular_plate.ron");
+    /// Scordelis–Lo roof.
+    pub const SCORDELIS_LO: &str = include_str!("../garments/benchmarks/scordelis_lo_roof.ron");
+    /// Pinched cylinder.
+    pub const PINCHED_CYLINDER: &str = include_str!("../garments/benchmarks/pinched_cylinder.ron");
+    /// Twisted beam.
+    pub const TWISTED_BEAM: &str = include_str!("../garments/benchmarks/twisted_beam.ron");
+    /// Clamped plate, thin limit.
+    pub const CLAMPED_PLATE: &str = include_str!("../garments/benchmarks/clamped_plate.ron");
+}
+
+/// Bundled reference tables (copies of `shared/reference`, headers name the sources).
+pub mod references {
+    /// Elastica computed for the end-shear cantilever.
+    pub const END_SHEAR_ELASTICA: &str = include_str!("../reference/cantilever_end_shear_elastica_computed.csv");
+    /// Sze et al. (2004) slit annular plate, S4R 10×80.
+    pub const SLIT_ANNULUS: &str = include_str!("../reference/sze2004_slit_annular_plate.csv");
+}
+
+/// One benchmark run.
+#[derive(Clone, Debug, Serialize)]
+pub struct Record {
+    /// Benchmark name.
+    pub benchmark: String,
+    /// Mesh label.
+    pub mesh: String,
+    /// Free DOFs.
+    pub dofs: usize,
+    /// Newton iterations.
+    pub newton_iterations: usize,
+    /// Wall time of the solve (s).
+    pub wall_s: f64,
+    /// Computed value (for curves: at the last load level).
+    pub value: f64,
+    /// Reference value it compares with.
+    pub reference: f64,
+    /// Relative error (for curves: the largest over all reference levels).
+    pub rel_error: f64,
+}
+
+/// Parses a numeric CSV with `#` comments and one header line.
+pub fn parse_csv(text: &str) -> Vec<Vec<f64>> {
+    text.lines()
+        .filter(|l| !l.starts_with('#') && !l.trim().is_empty())
+        .skip(1)
+        .map(|l| l.split(',').filter_map(|v| v.trim().parse::<f64>().ok()).collect())
+        .collect()
+}
+
+/// Applies text substitutions to a scene template and solves it without writing files.
+pub fn solve_variant(template: &str, name: &str, replace: &[(&str, String)]) -> Result<Summary, String> {
+    let mut text = template.to_string();
+    for (from, to) in replace {
+        if !text.contains(from) {
+            return Err(format!("benchmark {name}: template has no '{from}'"));
+        }
+        text = text.replacen(from, to, 1);
+    }
+    let sc = scene::parse(name, &text).map_err(|e| e.to_string())?;
+    let built = scene::build(&sc, name, &text).map_err(|e| e.to_string())?;
+    analysis::run(&sc, &built, &RunOptions::default(), &mut |_| {}).map_err(|e| e.to_string())
+}
+
+/// Material variants the curves are run with.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Material {
+    /// St. Venant–Kirchhoff.
+    Svk,
+    /// Ciarlet neo-Hookean with K, μ from the same E, ν.
+    NeoHookean,
+}
+
+/// Substitution turning a scene's St. Venant–Kirchhoff material into the neo-Hookean one
+/// with the same E, ν.
+fn material_swap(m: Material) -> Vec<(&'static str, String)> {
+    match m {
+        Material::Svk => vec![],
+        Material::NeoHookean => vec![("StVenantKirchhoff(", "NeoHookean(".to_string())],
+    }
+}
+
+/// `thickness: h` with the shear treatment appended when SRI is asked for.
+fn thickness_field(h: f64, shear_sri: bool) -> String {
+    if shear_sri { format!("thickness: {h:e}, shear: Sri") } else { format!("thickness: {h:e}") }
+}
+
+/// A tip-curve comparison: load level, computed (a, b), reference (a, b).
+#[derive(Clone, Debug)]
+pub struct CurvePoint {
+    /// Load fraction.
+    pub level: f64,
+    /// Computed pair.
+    pub computed: [f64; 2],
+    /// Reference pair.
+    pub reference: [f64; 2],
+}
+
+impl CurvePoint {
+    /// |computed − reference| / |reference| for the pair as a vector.
+    pub fn rel_error(&self) -> f64 {
+        let d = ((self.computed[0] - self.reference[0]).powi(2) + (self.computed[1] - self.reference[1]).powi(2)).sqrt();
+        d / (self.reference[0].powi(2) + self.reference[1].powi(2)).sqrt()
+    }
+}
+
+/// Result of a curve benchmark.
+#[derive(Clone, Debug)]
+pub struct Curve {
+    /// The run.
+    pub summary: Summary,
+    /// Points compared.
+    pub points: Vec<CurvePoint>,
+    /// Wall time (s).
+    pub wall_s: f64,
+}
+
+impl Curve {
+    /// Largest relative error over the points.
+    pub fn max_error(&self) -> f64 {
+        self.points.iter().map(CurvePoint::rel_error).fold(0.0, f64::max)
+    }
+}
+
+/// End-moment roll-up (Sze et al. 2004 §3.2) on an nx×1 mesh with thickness `h`
+/// (the moment is scaled with EI so M/M0 runs to 2π). Reference: the analytic circle,
+/// −u = L(1 − sin m/m), w = L(1 − cos m)/m.
+pub fn end_moment(nx: usize, h: f64, material: Material, shear_sri: bool) -> Result<Curve, String> {
+    let t = Instant::now();
+    let mmax = 2.0 * std::f64::consts::PI * 1.2e6 * h.powi(3) / 12.0 / 12.0;
+    let mut rep = vec![("nx: 16", format!("nx: {nx}")), ("thickness: 0.1", thickness_field(h, shear_sri)), ("-52.35987755982988", format!("{:e}", -mmax))];
+    rep.extend(material_swap(material));
+    let summary = solve_variant(scenes::END_MOMENT, "cantilever_end_moment", &rep)?;
+    let tip = &summary.monitors[0];
+    let points = summary
+        .increments
+        .iter()
+        .zip(&tip.values)
+        .map(|(inc, v)| {
+            let m = 2.0 * std::f64::consts::PI * inc.scales[0];
+            CurvePoint { level: inc.scales[0], computed: [-v[0], v[1]], reference: [12.0 * (1.0 - m.sin() / m), 12.0 * (1.0 - m.cos()) / m] }
+        })
+        .collect();
+    Ok(Curve { summary, points, wall_s: t.elapsed().as_secs_f64() })
+}
+
+/// End-shear cantilever (Sze et al. 2004 §3.1) on nx×1 with thickness `h` (force scaled with
+/// EI); reference: the computed elastica table (−u, w) at each load level.
+pub fn end_shear(nx: usize, h: f64, material: Material, shear_sri: bool) -> Result<Curve, String> {
+    let t = Instant::now();
+    let pmax = 4.0 * (h / 0.1f64).powi(3);
+    let mut rep = vec![("nx: 16", format!("nx: {nx}")), ("thickness: 0.1", thickness_field(h, shear_sri)), ("force: (0.0, 0.0, 4.0)", format!("force: (0.0, 0.0, {pmax:e})"))];
+    rep.extend(material_swap(material));
+    let summary = solve_variant(scenes::END_SHEAR, "cantilever_end_shear", &rep)?;
+    let table = parse_csv(references::END_SHEAR_ELASTICA);
+    let tip = &summary.monitors[0];
+    let mut points = Vec::new();
+    for (inc, v) in summary.increments.iter().zip(&tip.values) {
+        if let Some(row) = table.iter().find(|r| r.len() >= 5 && (r[0] - inc.scales[0]).abs() < 1e-9) {
+            points.push(CurvePoint { level: inc.scales[0], computed: [-v[0], v[1]], reference: [row[3], row[4]] });
+        }
+    }
+    Ok(Curve { summary, points, wall_s: t.elapsed().as_secs_f64() })
+}
+
+/// Slit annular plate (Sze et al. 2004 §3.3) on nr×nθ; compares w_A and w_B with the table.
+/// The returned points hold (w_A, w_B); the error of each point is reported per component.
+pub fn slit_annulus(nr: usize, ntheta: usize, material: Material) -> Result<Curve, String> {
+    let t = Instant::now();
+    let mut rep = vec![("nr: 10, ntheta: 80", format!("nr: {nr}, ntheta: {ntheta}"))];
+    rep.extend(material_swap(material));
+    let summary = solve_variant(scenes::SLIT_ANNULUS, "slit_annular_plate", &rep)?;
+    let table = parse_csv(references::SLIT_ANNULUS);
+    let (a, b) = (&summary.monitors[0], &summary.monitors[1]);
+    let mut points = Vec::new();
+    for ((inc, va), vb) in summary.increments.iter().zip(&a.values).zip(&b.values) {
+        if let Some(row) = table.iter().find(|r| r.len() >= 4 && r[0] > 0.0 && (r[0] - inc.scales[0]).abs() < 1e-9) {
+            points.push(CurvePoint { level: inc.scales[0], computed: [va[0], vb[0]], reference: [row[2], row[3]] });
+        }
+    }
+    Ok(Curve { summary, points, wall_s: t.elapsed().as_secs_f64() })
+}
+
+/// Largest componentwise relative error of a two-point curve (slit annulus).
+pub fn max_component_error(points: &[CurvePoint]) -> f64 {
+    points
+        .iter()
+        .flat_map(|p| (0..2).map(move |k| ((p.computed[k] - p.reference[k]) / p.reference[k]).abs()))
+        .fold(0.0, f64::max)
+}
+
+/// A linear benchmark value: the monitored quantity's magnitude.
+pub fn linear_value(template: &str, name: &str, rep: &[(&str, String)], quantity: usize) -> Result<(f64, Summary, f64), String> {
+    let t = Instant::now();
+    let s = solve_variant(template, name, rep)?;
+    let v = s.monitors[0].values.last().and_then(|v| v.get(quantity)).copied().ok_or("no monitored value")?;
+    Ok((v.abs(), s, t.elapsed().as_secs_f64()))
+}
+
+/// Scordelis–Lo roof on an n×n quarter model: |u_z| at the free-edge midpoint.
+pub fn scordelis_lo(n: usize) -> Result<(f64, Summary, f64), String> {
+    linear_value(scenes::SCORDELIS_LO, "scordelis_lo_roof", &[("n_axial: 16, n_circ: 16", format!("n_axial: {n}, n_circ: {n}"))], 0)
+}
+
+/// Pinched cylinder on an n×n octant: |u_z| under the load.
+pub fn pinched_cylinder(n: usize) -> Result<(f64, Summary, f64), String> {
+    linear_value(scenes::PINCHED_CYLINDER, "pinched_cylinder", &[("n_axial: 32, n_circ: 32", format!("n_axial: {n}, n_circ: {n}"))], 0)
+}
+
+/// Twisted beam on nx×ny, thickness `t` (load scaled as t³ like the reference: P = 1 for
+/// 0.32, 1e-6 for 0.0032), in-plane (along z) or out-of-plane (along y).
+pub fn twisted_beam(nx: usize, ny: usize, t: f64, in_plane: bool) -> Result<(f64, Summary, f64), String> {
+    let p = if t < 0.01 { 1e-6 } else { 1.0 };
+    let (load, q) = if in_plane { ("in_plane", 1) } else { ("out_of_plane", 0) };
+    let rep = vec![
+        ("nx: 12, ny: 2", format!("nx: {nx}, ny: {ny}")),
+        ("thickness: 0.32", format!("thickness: {t:e}")),
+        ("scale: {\"in_plane\": 1.0}", format!("scale: {{\"{load}\": {p:e}}}")),
+    ];
+    linear_value(scenes::TWISTED_BEAM, "twisted_beam", &rep, q)
+}
+
+/// Clamped square plate under pressure, quarter n×n, thickness/side `t`: centre deflection
+/// and the Kirchhoff reference 0.00126532 q a⁴ / D.
+pub fn clamped_plate(n: usize, t: f64, shear_sri: bool) -> Result<(f64, f64, Summary, f64), String> {
+    let q = 1e-6 * (t / 1e-4f64).powi(3);
+    let rep = vec![
+        ("nx: 16, ny: 16", format!("nx: {n}, ny: {n}")),
+        ("thickness: 1.0e-4", thickness_field(t, shear_sri)),
+        ("traction: (0.0, 0.0, -1.0e-6)", format!("traction: (0.0, 0.0, {:e})", -q)),
+    ];
+    let (v, s, w) = linear_value(scenes::CLAMPED_PLATE, "clamped_plate", &rep, 0)?;
+    let d = 1.0e7 * t.powi(3) / (12.0 * (1.0 - 0.09));
+    Ok((v, 0.00126532 * q / d, s, w))
+}
+
+fn record(benchmark: &str, mesh: String, s: &Summary, wall_s: f64, value: f64, reference: f64, rel_error: f64) -> Record {
+    Record { benchmark: benchmark.into(), mesh, dofs: s.sizes.dofs, newton_iterations: s.newton_iterations, wall_s, value, reference, rel_error }
+}
+
+/// Runs every benchmark at three or more meshes, prints the table, writes JSON and an
+/// error-versus-time SVG beside it.
+pub fn run_all(json: &Path, quick: bool) -> Result<(), String> {
+    let mut recs: Vec<Record> = Vec::new();
+    fn pick<T>(v: Vec<T>, quick: bool) -> Vec<T> {
+        if quick { v.into_iter().take(1).collect() } else { v }
+    }
+    let print = |r: &Record| {
+        println!(
+            "{:<34} {:>10} {:>8} {:>6} {:>9.3} {:>13.6e} {:>13.6e} {:>9.2e}",
+            r.benchmark, r.mesh, r.dofs, r.newton_iterations, r.wall_s, r.value, r.reference, r.rel_error
+        )
+    };
+    println!("{:<34} {:>10} {:>8} {:>6} {:>9} {:>13} {:>13} {:>9}", "benchmark", "mesh", "dofs", "newton", "wall_s", "value", "reference", "rel_err");
+    for n in pick(vec![4, 8, 16, 32], quick) {
+        let (v, s, w) = scordelis_lo(n)?;
+        recs.push(record("scordelis_lo_roof", format!("{n}x{n}"), &s, w, v, 0.3024, (v - 0.3024).abs() / 0.3024));
+        print(recs.last().ok_or("empty")?);
+    }
+    for n in pick(vec![8, 16, 32, 64], quick) {
+        let (v, s, w) = pinched_cylinder(n)?;
+        recs.push(record("pinched_cylinder", format!("{n}x{n}"), &s, w, v, 1.8248e-5, (v - 1.8248e-5).abs() / 1.8248e-5));
+        print(recs.last().ok_or("empty")?);
+    }
+    for (t, ip, reference) in [(0.32, true, 5.424e-3), (0.32, false, 1.754e-3), (0.0032, true, 5.256e-3), (0.0032, false, 1.294e-3)] {
+        for (nx, ny) in pick(vec![(12, 2), (24, 4), (48, 8)], quick) {
+            let (v, s, w) = twisted_beam(nx, ny, t, ip)?;
+            let name = format!("twisted_beam_t{t}_{}", if ip { "in_plane" } else { "out_of_plane" });
+            recs.push(record(&name, format!("{nx}x{ny}"), &s, w, v, reference, (v - reference).abs() / reference));
+            print(recs.last().ok_or("empty")?);
+        }
+    }
+    for (m, label) in [(Material::Svk, "svk"), (Material::NeoHookean, "neo_hookean")] {
+        for nx in pick(vec![16, 32, 64], quick) {
+            let c = end_moment(nx, 0.1, m, false)?;
+            let last = c.points.last().ok_or("no points")?;
+            recs.push(record(&format!("end_moment_{label}"), format!("{nx}x1"), &c.summary, c.wall_s, last.computed[0], last.reference[0], c.max_error()));
+            print(recs.last().ok_or("empty")?);
+        }
+        for nx in pick(vec![16, 32, 64], quick) {
+            let c = end_shear(nx, 0.1, m, false)?;
+            let last = c.points.last().ok_or("no points")?;
+            recs.push(record(&format!("end_shear_{label}"), format!("{nx}x1"), &c.summary, c.wall_s, last.computed[1], last.reference[1], c.max_error()));
+            print(recs.last().ok_or("empty")?);
+        }
+        for (nr, nt) in pick(vec![(5, 40), (10, 80), (20, 160)], quick) {
+            let c = slit_annulus(nr, nt, m)?;
+            let last = c.points.last().ok_or("no points")?;
+            recs.push(record(&format!("slit_annulus_{label}"), format!("{nr}x{nt}"), &c.summary, c.wall_s, last.computed[0], last.reference[0], max_component_error(&c.points)));
+            print(recs.last().ok_or("empty")?);
+        }
+    }
+    for n in pick(vec![8, 16, 32], quick) {
+        for sri in [false, true] {
+            let (v, reference, s, w) = clamped_plate(n, 1e-4, sri)?;
+            let name = if sri { "clamped_plate_t1e-4_sri" } else { "clamped_plate_t1e-4_mitc4" };
+            recs.push(record(name, format!("{n}x{n}"), &s, w, v, reference, (v - reference).abs() / reference));
+            print(recs.last().ok_or("empty")?);
+        }
+    }
+    let json_text = serde_json::to_vec_pretty(&recs).map_err(|e| e.to_string())?;
+    crate::io::atomic::write_atomic(json, &json_text).map_err(|e| format!("{}: {e}", json.display()))?;
+    // Error against time, one series per benchmark.
+    let mut names: Vec<&str> = recs.iter().map(|r| r.benchmark.as_str()).collect();
+    names.dedup();
+    let series: Vec<Series> = names
+        .iter()
+        .map(|n| Series {
+            name: n.to_string(),
+            points: recs.iter().filter(|r| r.benchmark == *n && r.rel_error > 0.0).map(|r| (r.wall_s.max(1e-4), r.rel_error)).collect(),
+            reference: false,
+        })
+        .filter(|s| !s.points.is_empty())
+        .collect();
+    let svg = json.with_extension("svg");
+    plot_xy(&svg, "plyshell benchmarks: error against wall time", "wall time (s)", "relative error", &series, true, true)
+        .map_err(|e| format!("{}: {e}", svg.display()))?;
+    println!("records in {}, plot in {}", json.display(), svg.display());
+    Ok(())
+}

@@ -1,0 +1,447 @@
+//! Scene → model: meshes, sections, node sets, supports, loads, steps and monitors.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+use std::sync::Arc;
+
+use nalgebra::Vector3;
+
+use super::error::{Locator, SceneError};
+use super::spec::*;
+use crate::element::quadrature::{bilinear, gauss_legendre};
+use crate::element::{DirectorFrame, Section, NODE_DOFS};
+use crate::material::{bulk_shear_from_young_poisson, NeoHookean, ShellMaterial, StVenantKirchhoff};
+use crate::mesh::{self, MeshQuality, ShellMesh};
+use crate::model::{DofMap, ElementDef, Load, LoadKind, Model, PartInfo};
+use crate::solver::StepPlan;
+
+/// A monitored node.
+#[derive(Clone, Debug)]
+pub struct Monitor {
+    /// Monitor name.
+    pub name: String,
+    /// Global node.
+    pub node: usize,
+    /// Recorded quantities.
+    pub dofs: Vec<MonitorDof>,
+}
+
+/// Everything the solver and the exporter need from a scene.
+#[derive(Clone, Debug)]
+pub struct BuiltScene {
+    /// The model.
+    pub model: Model,
+    /// The steps.
+    pub steps: Vec<StepPlan>,
+    /// Monitored nodes.
+    pub monitors: Vec<Monitor>,
+    /// Resolved node sets (global node numbers).
+    pub node_sets: BTreeMap<String, Vec<usize>>,
+    /// Mesh quality per part.
+    pub quality: Vec<(String, MeshQuality)>,
+}
+
+fn v3(a: [f64; 3]) -> Vector3<f64> {
+    Vector3::new(a[0], a[1], a[2])
+}
+
+fn positive(x: f64) -> bool {
+    x.is_finite() && x > 0.0
+}
+
+/// Builds the model of `scene`, whose text `text` came from `file` (for error positions;
+/// OBJ paths are relative to the file's directory).
+pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneError> {
+    let loc = Locator::new(file, text);
+    let base_dir = Path::new(file).parent().unwrap_or(Path::new("."));
+
+    // Materials.
+    let mut materials: BTreeMap<&str, Arc<dyn ShellMaterial>> = BTreeMap::new();
+    for (name, spec) in &scene.materials {
+        let field = format!("materials[{name}]");
+        let bad = |key: &str, msg: &str| loc.at(Some(name), Some(key), format!("{field}.{key}"), msg.to_string());
+        let m: Arc<dyn ShellMaterial> = match *spec {
+            MaterialSpec::StVenantKirchhoff { young, poisson, shear_factor } => {
+                check_young_poisson(young, poisson, &bad)?;
+                if !positive(shear_factor) {
+                    return Err(bad("shear_factor", "expected a positive shear correction factor (e.g. 0.8333)"));
+                }
+                Arc::new(StVenantKirchhoff::new(young, poisson, shear_factor))
+            }
+            MaterialSpec::NeoHookean { young, poisson } => {
+                check_young_poisson(young, poisson, &bad)?;
+                let (k, mu) = bulk_shear_from_young_poisson(young, poisson);
+                Arc::new(NeoHookean::new(k, mu))
+            }
+            MaterialSpec::NeoHookeanBulkShear { bulk, shear } => {
+                if !positive(bulk) {
+                    return Err(bad("bulk", "expected a positive bulk modulus"));
+                }
+                if !positive(shear) {
+                    return Err(bad("shear", "expected a positive shear modulus"));
+                }
+                Arc::new(NeoHookean::new(bulk, shear))
+            }
+        };
+        materials.insert(name.as_str(), m);
+    }
+
+    // Parts and meshes.
+    if scene.parts.is_empty() {
+        return Err(loc.at(None, Some("parts"), "parts", "expected at least one part"));
+    }
+    let mut x0 = Vec::new();
+    let mut d0 = Vec::new();
+    let mut elements = Vec::new();
+    let mut sections = Vec::new();
+    let mut parts = Vec::new();
+    let mut meshes: Vec<ShellMesh> = Vec::new();
+    let mut quality = Vec::new();
+    for (pi, p) in scene.parts.iter().enumerate() {
+        let field = format!("parts[{}]", p.name);
+        if scene.parts[..pi].iter().any(|q| q.name == p.name) {
+            return Err(loc.at(Some(&p.name), Some("name"), format!("{field}.name"), "duplicate part name"));
+        }
+        let material = materials.get(p.material.as_str()).cloned().ok_or_else(|| {
+            let known: Vec<&str> = materials.keys().copied().collect();
+            loc.at_value(
+                &p.name,
+                &p.material,
+                format!("{field}.material"),
+                format!("unknown material \"{}\"; defined materials: {}", p.material, known.join(", ")),
+            )
+        })?;
+        if !positive(p.thickness) {
+            return Err(loc.at(
+                Some(&p.name),
+                Some("thickness"),
+                format!("{field}.thickness"),
+                format!("expected a positive thickness, found {}", p.thickness),
+            ));
+        }
+        if !(1..=5).contains(&p.thickness_points) {
+            return Err(loc.at(Some(&p.name), Some("thickness_points"), format!("{field}.thickness_points"), "expected 1 to 5 Gauss points"));
+        }
+        let m = make_mesh(&p.mesh, base_dir).map_err(|e| loc.at(Some(&p.name), Some("mesh"), format!("{field}.mesh"), e.to_string()))?;
+        quality.push((p.name.clone(), m.quality()));
+        let first_node = x0.len();
+        let first_element = elements.len();
+        sections.push(Section { thickness: p.thickness, shear: p.shear, thickness_points: p.thickness_points, material });
+        let grain = p.grain.map(v3);
+        for q in &m.quads {
+            elements.push(ElementDef { nodes: q.map(|n| n + first_node), section: pi, part: pi, grain });
+        }
+        x0.extend_from_slice(&m.nodes);
+        d0.extend_from_slice(&m.directors);
+        parts.push(PartInfo { name: p.name.clone(), first_node, n_nodes: m.nodes.len(), first_element, n_elements: m.quads.len() });
+        meshes.push(m);
+    }
+    let n_nodes = x0.len();
+    let part_index = |name: &str| parts.iter().position(|p: &PartInfo| p.name == name);
+
+    // Node sets.
+    let mut node_sets: BTreeMap<String, Vec<usize>> = BTreeMap::new();
+    for (name, sel) in &scene.node_sets {
+        let field = format!("node_sets[{name}]");
+        let unknown_part = |part: &str| {
+            let known: Vec<&str> = parts.iter().map(|p| p.name.as_str()).collect();
+            loc.at_value(name, part, format!("{field}.part"), format!("unknown part \"{part}\"; parts: {}", known.join(", ")))
+        };
+        let scope = |part: &Option<String>| -> Result<Vec<usize>, SceneError> {
+            match part {
+                Some(pn) => {
+                    let i = part_index(pn).ok_or_else(|| unknown_part(pn))?;
+                    Ok((0..meshes.len()).filter(|&k| k == i).collect())
+                }
+                None => Ok((0..meshes.len()).collect()),
+            }
+        };
+        let mut nodes = Vec::new();
+        match sel {
+            Selector::Box { min, max, part } => {
+                for k in scope(part)? {
+                    nodes.extend(mesh::select_box(&meshes[k], v3(*min), v3(*max)).into_iter().map(|n| n + parts[k].first_node));
+                }
+            }
+            Selector::Plane { point, normal, tol, part } => {
+                if v3(*normal).norm() == 0.0 {
+                    return Err(loc.at(Some(name), Some("normal"), format!("{field}.normal"), "expected a non-zero normal"));
+                }
+                for k in scope(part)? {
+                    nodes.extend(mesh::select_plane(&meshes[k], v3(*point), v3(*normal), *tol).into_iter().map(|n| n + parts[k].first_node));
+                }
+            }
+            Selector::Nearest { point, part } => {
+                let mut best: Option<(f64, usize)> = None;
+                for k in scope(part)? {
+                    for n in mesh::select_nearest(&meshes[k], v3(*point)) {
+                        let g = n + parts[k].first_node;
+                        let dist = (x0[g] - v3(*point)).norm();
+                        if best.is_none_or(|(d, _)| dist < d) {
+                            best = Some((dist, g));
+                        }
+                    }
+                }
+                nodes.extend(best.map(|b| b.1));
+            }
+            Selector::Edge { part, edge } => {
+                let k = part_index(part).ok_or_else(|| unknown_part(part))?;
+                let row = meshes[k].edges.get(edge).ok_or_else(|| {
+                    let known: Vec<&str> = meshes[k].edges.keys().map(|s| s.as_str()).collect();
+                    loc.at_value(name, edge, format!("{field}.edge"), format!("part \"{part}\" has no edge \"{edge}\"; its edges: {}", known.join(", ")))
+                })?;
+                nodes.extend(row.iter().map(|n| n + parts[k].first_node));
+            }
+            Selector::Part { part } => {
+                let k = part_index(part).ok_or_else(|| unknown_part(part))?;
+                nodes.extend(parts[k].first_node..parts[k].first_node + parts[k].n_nodes);
+            }
+        }
+        if nodes.is_empty() {
+            return Err(loc.at(Some(name), None, field, "the selector selects no node; check its coordinates against the mesh"));
+        }
+        node_sets.insert(name.clone(), nodes);
+    }
+    let get_set = |set: &str, owner_anchor: &str, field: String| -> Result<&Vec<usize>, SceneError> {
+        node_sets.get(set).ok_or_else(|| {
+            let known: Vec<&str> = node_sets.keys().map(|s| s.as_str()).collect();
+            loc.at_value(owner_anchor, set, field, format!("no node set named \"{set}\"; node sets: {}", known.join(", ")))
+        })
+    };
+
+    // Supports: fixed DOFs and director tilt constraints.
+    let mut fixed = vec![false; NODE_DOFS * n_nodes];
+    let mut tilt_dirs: Vec<Vec<Vector3<f64>>> = vec![Vec::new(); n_nodes];
+    let axis = |a: Axis| match a {
+        Axis::X => Vector3::x(),
+        Axis::Y => Vector3::y(),
+        Axis::Z => Vector3::z(),
+    };
+    for (bi, bc) in scene.boundary.iter().enumerate() {
+        let (set, dofs): (&String, Vec<Dof>) = match bc {
+            BoundarySpec::Clamp { set } => {
+                let nodes = get_set(set, set, format!("boundary[{bi}].set"))?;
+                for &n in nodes {
+                    fixed[NODE_DOFS * n..NODE_DOFS * n + NODE_DOFS].iter_mut().for_each(|f| *f = true);
+                }
+                continue;
+            }
+            BoundarySpec::Pin { set } => (set, vec![Dof::Ux, Dof::Uy, Dof::Uz]),
+            BoundarySpec::Fix { set, dofs } => (set, dofs.clone()),
+            BoundarySpec::Symmetry { set, normal } => {
+                let (u, t) = match normal {
+                    Axis::X => (Dof::Ux, Dof::TiltX),
+                    Axis::Y => (Dof::Uy, Dof::TiltY),
+                    Axis::Z => (Dof::Uz, Dof::TiltZ),
+                };
+                (set, vec![u, t])
+            }
+        };
+        let nodes = get_set(set, set, format!("boundary[{bi}].set"))?;
+        for &n in nodes {
+            for d in &dofs {
+                match d {
+                    Dof::Ux => fixed[NODE_DOFS * n] = true,
+                    Dof::Uy => fixed[NODE_DOFS * n + 1] = true,
+                    Dof::Uz => fixed[NODE_DOFS * n + 2] = true,
+                    Dof::TiltX => tilt_dirs[n].push(axis(Axis::X)),
+                    Dof::TiltY => tilt_dirs[n].push(axis(Axis::Y)),
+                    Dof::TiltZ => tilt_dirs[n].push(axis(Axis::Z)),
+                }
+            }
+        }
+    }
+    // Director frames: t1 along the first constrained tilt direction, so each tilt
+    // constraint removes one α.
+    let mut frames0 = Vec::with_capacity(n_nodes);
+    for n in 0..n_nodes {
+        let d = d0[n];
+        let proj: Vec<Vector3<f64>> = tilt_dirs[n].iter().map(|t| t - d * d.dot(t)).filter(|p| p.norm() > 1e-3).collect();
+        let frame = DirectorFrame::new(d, proj.first().copied());
+        if let Some(p1) = proj.first() {
+            fixed[NODE_DOFS * n + 3] = true;
+            if proj.iter().skip(1).any(|p| p.normalize().cross(&p1.normalize()).norm() > 1e-3) {
+                fixed[NODE_DOFS * n + 4] = true;
+            }
+        }
+        frames0.push(frame);
+    }
+
+    // Loads.
+    let mut loads = Vec::new();
+    for (name, spec) in &scene.loads {
+        let field = format!("loads[{name}]");
+        let set_of = |set: &String| get_set(set, name, format!("{field}.set"));
+        let part_of = |part: &String| {
+            part_index(part).ok_or_else(|| {
+                let known: Vec<&str> = parts.iter().map(|p| p.name.as_str()).collect();
+                loc.at_value(name, part, format!("{field}.part"), format!("unknown part \"{part}\"; parts: {}", known.join(", ")))
+            })
+        };
+        let kind = match spec {
+            LoadSpec::NodalForce { set, force } => LoadKind::Forces(set_of(set)?.iter().map(|&n| (n, v3(*force))).collect()),
+            LoadSpec::TotalForce { set, force } => {
+                let nodes = set_of(set)?;
+                let f = v3(*force) / nodes.len() as f64;
+                LoadKind::Forces(nodes.iter().map(|&n| (n, f)).collect())
+            }
+            LoadSpec::NodalMoment { set, moment } => LoadKind::Moments(set_of(set)?.iter().map(|&n| (n, v3(*moment))).collect()),
+            LoadSpec::EdgeMoment { set, moment_per_length } => {
+                let w = tributary_lengths(&x0, set_of(set)?);
+                LoadKind::Moments(w.into_iter().map(|(n, l)| (n, v3(*moment_per_length) * l)).collect())
+            }
+            LoadSpec::EdgeForce { set, force_per_length } => {
+                let w = tributary_lengths(&x0, set_of(set)?);
+                LoadKind::Forces(w.into_iter().map(|(n, l)| (n, v3(*force_per_length) * l)).collect())
+            }
+            LoadSpec::SurfaceTraction { part, traction } => {
+                let k = part_of(part)?;
+                LoadKind::Forces(area_weights(&x0, &elements, &parts[k]).into_iter().map(|(n, a)| (n, v3(*traction) * a)).collect())
+            }
+            LoadSpec::Gravity { part, areal_density, g } => {
+                let k = part_of(part)?;
+                if !(areal_density.is_finite() && *areal_density >= 0.0) {
+                    return Err(loc.at(Some(name), Some("areal_density"), format!("{field}.areal_density"), "expected a non-negative mass per area"));
+                }
+                let w = v3(*g) * *areal_density;
+                LoadKind::Forces(area_weights(&x0, &elements, &parts[k]).into_iter().map(|(n, a)| (n, w * a)).collect())
+            }
+            LoadSpec::Displacement { set, dof, value } => {
+                let k = match dof {
+                    Dof::Ux => 0,
+                    Dof::Uy => 1,
+                    Dof::Uz => 2,
+                    _ => return Err(loc.at(Some(name), Some("dof"), format!("{field}.dof"), "only translations (Ux, Uy, Uz) can be prescribed")),
+                };
+                let nodes = set_of(set)?;
+                for &n in nodes {
+                    fixed[NODE_DOFS * n + k] = true;
+                }
+                LoadKind::Displacements(nodes.iter().map(|&n| (NODE_DOFS * n + k, *value)).collect())
+            }
+        };
+        loads.push(Load { name: name.clone(), kind });
+    }
+
+    // Steps.
+    if scene.steps.is_empty() {
+        return Err(loc.at(None, Some("steps"), "steps", "expected at least one step"));
+    }
+    let mut steps = Vec::new();
+    let mut current = vec![0.0; loads.len()];
+    for (si, s) in scene.steps.iter().enumerate() {
+        let field = format!("steps[{}]", s.name);
+        if s.increments == 0 {
+            return Err(loc.at(Some(&s.name), Some("increments"), format!("{field}.increments"), "expected at least one increment"));
+        }
+        for (lname, &v) in &s.scale {
+            let Some(i) = loads.iter().position(|l| &l.name == lname) else {
+                let known: Vec<&str> = loads.iter().map(|l| l.name.as_str()).collect();
+                return Err(loc.at_value(&s.name, lname, format!("{field}.scale"), format!("no load named \"{lname}\"; loads: {}", known.join(", "))));
+            };
+            if !v.is_finite() {
+                return Err(loc.at_value(&s.name, lname, format!("{field}.scale[{lname}]"), "expected a finite scale"));
+            }
+            current[i] = v;
+        }
+        let _ = si;
+        steps.push(StepPlan { name: s.name.clone(), increments: s.increments, linear: s.linear, target_scales: current.clone() });
+    }
+
+    // Monitors.
+    let mut monitors = Vec::new();
+    for m in &scene.monitors {
+        let candidates: Vec<usize> = match (&m.part, &m.set) {
+            (_, Some(set)) => get_set(set, &m.name, format!("monitors[{}].set", m.name))?.clone(),
+            (Some(pn), None) => {
+                let k = part_index(pn).ok_or_else(|| loc.at_value(&m.name, pn, format!("monitors[{}].part", m.name), format!("unknown part \"{pn}\"")))?;
+                (parts[k].first_node..parts[k].first_node + parts[k].n_nodes).collect()
+            }
+            (None, None) => (0..n_nodes).collect(),
+        };
+        let p = v3(m.point);
+        let node = candidates
+            .into_iter()
+            .min_by(|&a, &b| (x0[a] - p).norm().total_cmp(&(x0[b] - p).norm()))
+            .ok_or_else(|| loc.at(Some(&m.name), None, format!("monitors[{}]", m.name), "no node to monitor"))?;
+        monitors.push(Monitor { name: m.name.clone(), node, dofs: m.dofs.clone() });
+    }
+
+    let dofs = DofMap::new(&fixed);
+    let model = Model { x0, frames0, elements, sections, parts, dofs, loads };
+    Ok(BuiltScene { model, steps, monitors, node_sets, quality })
+}
+
+fn check_young_poisson(young: f64, poisson: f64, bad: &dyn Fn(&str, &str) -> SceneError) -> Result<(), SceneError> {
+    if !positive(young) {
+        return Err(bad("young", "expected a positive Young's modulus"));
+    }
+    if !(poisson.is_finite() && poisson > -1.0 && poisson < 0.5) {
+        return Err(bad("poisson", "expected a Poisson ratio in (-1, 0.5)"));
+    }
+    Ok(())
+}
+
+fn make_mesh(spec: &MeshSpec, base_dir: &Path) -> Result<ShellMesh, mesh::MeshError> {
+    let rad = f64::to_radians;
+    match *spec {
+        MeshSpec::Rectangle { lx, ly, nx, ny } => mesh::rectangle(lx, ly, nx, ny),
+        MeshSpec::CylindricalPanel { radius, length, theta0, theta1, n_axial, n_circ } => {
+            mesh::cylindrical_panel(radius, length, rad(theta0), rad(theta1), n_axial, n_circ)
+        }
+        MeshSpec::Hemisphere { radius, hole_angle, phi0, phi1, n_merid, n_circ } => {
+            mesh::hemisphere(radius, rad(hole_angle), rad(phi0), rad(phi1), n_merid, n_circ)
+        }
+        MeshSpec::SlitAnnulus { ri, ro, nr, ntheta } => mesh::slit_annulus(ri, ro, nr, ntheta),
+        MeshSpec::TwistedStrip { length, width, twist, nx, ny } => mesh::twisted_strip(length, width, rad(twist), nx, ny),
+        MeshSpec::Obj { ref path } => mesh::read_obj(&base_dir.join(path)),
+    }
+}
+
+/// Tributary reference length of each node of an edge: half of each adjacent segment.
+/// Sets that are not ordered edges are ordered along their longest extent first.
+fn tributary_lengths(x: &[Vector3<f64>], nodes: &[usize]) -> Vec<(usize, f64)> {
+    let mut order = nodes.to_vec();
+    // An ordered edge has short consecutive gaps; otherwise sort along the longest extent.
+    let (mut lo, mut hi) = (Vector3::repeat(f64::INFINITY), Vector3::repeat(f64::NEG_INFINITY));
+    for &n in nodes {
+        lo = lo.inf(&x[n]);
+        hi = hi.sup(&x[n]);
+    }
+    let chain: f64 = nodes.windows(2).map(|w| (x[w[1]] - x[w[0]]).norm()).sum();
+    if chain > 1.5 * (hi - lo).norm() + 1e-12 {
+        let axis = (hi - lo).iamax();
+        order.sort_by(|&a, &b| x[a][axis].total_cmp(&x[b][axis]));
+    }
+    let mut out: Vec<(usize, f64)> = order.iter().map(|&n| (n, 0.0)).collect();
+    for i in 0..order.len().saturating_sub(1) {
+        let l = (x[order[i + 1]] - x[order[i]]).norm();
+        out[i].1 += 0.5 * l;
+        out[i + 1].1 += 0.5 * l;
+    }
+    out
+}
+
+/// Consistent nodal area weights ∫ N_a dA over a part's reference mid-surface.
+fn area_weights(x: &[Vector3<f64>], elements: &[ElementDef], part: &PartInfo) -> Vec<(usize, f64)> {
+    let mut w = vec![0.0; part.n_nodes];
+    let (p2, _) = gauss_legendre(2).unwrap_or((&[0.0], &[2.0]));
+    for el in &elements[part.first_element..part.first_element + part.n_elements] {
+        for &eta in p2 {
+            for &xi in p2 {
+                let (n, dxi, deta) = bilinear(xi, eta);
+                let mut gx = Vector3::zeros();
+                let mut gy = Vector3::zeros();
+                for a in 0..4 {
+                    gx += x[el.nodes[a]] * dxi[a];
+                    gy += x[el.nodes[a]] * deta[a];
+                }
+                let da = gx.cross(&gy).norm();
+                for a in 0..4 {
+                    w[el.nodes[a] - part.first_node] += n[a] * da;
+                }
+            }
+        }
+    }
+    w.into_iter().enumerate().map(|(i, a)| (i + part.first_node, a)).collect()
+}

@@ -1,0 +1,257 @@
+//! The scene file format (RON, deserialised with serde). What a user writes.
+
+use std::collections::BTreeMap;
+
+use serde::{Deserialize, Serialize};
+
+use crate::element::ShearTreatment;
+use crate::solver::SolverSettings;
+
+/// A whole analysis: parts, materials, supports, loads, steps and outputs.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scene {
+    /// Scene name (used for output file names).
+    pub name: String,
+    /// Free text.
+    #[serde(default)]
+    pub description: String,
+    /// Materials by name.
+    pub materials: BTreeMap<String, MaterialSpec>,
+    /// Shell parts.
+    pub parts: Vec<PartSpec>,
+    /// Node sets by name.
+    #[serde(default)]
+    pub node_sets: BTreeMap<String, Selector>,
+    /// Supports.
+    #[serde(default)]
+    pub boundary: Vec<BoundarySpec>,
+    /// Load patterns by name (scaled by the steps).
+    #[serde(default)]
+    pub loads: BTreeMap<String, LoadSpec>,
+    /// Solution steps, in order.
+    pub steps: Vec<StepSpec>,
+    /// Monitored points.
+    #[serde(default)]
+    pub monitors: Vec<MonitorSpec>,
+    /// Output controls.
+    #[serde(default)]
+    pub output: OutputSpec,
+    /// Solver controls.
+    #[serde(default)]
+    pub solver: SolverSettings,
+}
+
+/// A material model and its constants.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum MaterialSpec {
+    /// Isotropic St. Venant–Kirchhoff: Young's modulus, Poisson ratio, transverse shear
+    /// correction factor (default 5/6).
+    StVenantKirchhoff {
+        young: f64,
+        poisson: f64,
+        #[serde(default = "five_sixths")]
+        shear_factor: f64,
+    },
+    /// Ciarlet compressible neo-Hookean from Young's modulus and Poisson ratio.
+    NeoHookean { young: f64, poisson: f64 },
+    /// Ciarlet compressible neo-Hookean from bulk modulus K and shear modulus μ.
+    NeoHookeanBulkShear { bulk: f64, shear: f64 },
+}
+
+fn five_sixths() -> f64 {
+    5.0 / 6.0
+}
+
+/// One shell part: a mesh with a section.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PartSpec {
+    /// Part name.
+    pub name: String,
+    /// How the mesh is made.
+    pub mesh: MeshSpec,
+    /// Material name (a key of `materials`).
+    pub material: String,
+    /// Shell thickness.
+    pub thickness: f64,
+    /// Transverse shear treatment (default MITC4).
+    #[serde(default)]
+    pub shear: ShearTreatment,
+    /// Gauss points through the thickness (default 2).
+    #[serde(default = "two")]
+    pub thickness_points: usize,
+    /// Lamina e1 direction (material grain); default the element's ξ direction.
+    #[serde(default)]
+    pub grain: Option<[f64; 3]>,
+}
+
+fn two() -> usize {
+    2
+}
+
+/// Mesh generators and imports. Angles in degrees.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum MeshSpec {
+    /// Plate in the xy plane, x ∈ [0, lx], y ∈ [0, ly]. Edges xmin, xmax, ymin, ymax.
+    Rectangle { lx: f64, ly: f64, nx: usize, ny: usize },
+    /// Cylindrical panel about the x axis, point (x, R sin θ, R cos θ). Edges x0, x1,
+    /// theta0, theta1.
+    CylindricalPanel { radius: f64, length: f64, theta0: f64, theta1: f64, n_axial: usize, n_circ: usize },
+    /// Spherical shell with a polar hole. Edges hole, equator, phi0, phi1.
+    Hemisphere { radius: f64, hole_angle: f64, phi0: f64, phi1: f64, n_merid: usize, n_circ: usize },
+    /// Flat annulus with a radial slit at θ = 0. Edges inner, outer, slit_start, slit_end.
+    SlitAnnulus { ri: f64, ro: f64, nr: usize, ntheta: usize },
+    /// Strip along x, cross-section twisted linearly by `twist`. Edges x0, x1, smin, smax.
+    TwistedStrip { length: f64, width: f64, twist: f64, nx: usize, ny: usize },
+    /// Quad mesh from a Wavefront OBJ file (path relative to the scene file). Edge boundary.
+    Obj { path: String },
+}
+
+/// Node selectors.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum Selector {
+    /// Nodes inside an axis-aligned box (inclusive, small tolerance).
+    Box { min: [f64; 3], max: [f64; 3], #[serde(default)] part: Option<String> },
+    /// Nodes within `tol` of a plane.
+    Plane { point: [f64; 3], normal: [f64; 3], #[serde(default = "plane_tol")] tol: f64, #[serde(default)] part: Option<String> },
+    /// The single node nearest to a point.
+    Nearest { point: [f64; 3], #[serde(default)] part: Option<String> },
+    /// A named edge of a part's generated mesh, in order along the edge.
+    Edge { part: String, edge: String },
+    /// Every node of a part.
+    Part { part: String },
+}
+
+fn plane_tol() -> f64 {
+    1e-6
+}
+
+/// Translational and director-tilt DOFs for supports.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Dof {
+    Ux,
+    Uy,
+    Uz,
+    /// Tilt of the director towards global x stays zero.
+    TiltX,
+    /// Tilt of the director towards global y stays zero.
+    TiltY,
+    /// Tilt of the director towards global z stays zero.
+    TiltZ,
+}
+
+/// Global axes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Axis {
+    X,
+    Y,
+    Z,
+}
+
+/// Supports.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum BoundarySpec {
+    /// All five DOFs fixed.
+    Clamp { set: String },
+    /// Translations fixed, director free.
+    Pin { set: String },
+    /// Chosen DOFs fixed.
+    Fix { set: String, dofs: Vec<Dof> },
+    /// Mirror symmetry about the plane with the given normal: normal translation and the
+    /// director tilt towards the normal fixed.
+    Symmetry { set: String, normal: Axis },
+}
+
+/// Load patterns at unit scale.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum LoadSpec {
+    /// The same force on every node of the set.
+    NodalForce { set: String, force: [f64; 3] },
+    /// A total force shared equally by the nodes of the set.
+    TotalForce { set: String, force: [f64; 3] },
+    /// The same moment on every node of the set (about fixed global axes).
+    NodalMoment { set: String, moment: [f64; 3] },
+    /// A total moment shared along an edge in proportion to each node's tributary length.
+    EdgeMoment { set: String, moment_per_length: [f64; 3] },
+    /// A force per unit length along an edge (consistent lumping on the reference edge).
+    EdgeForce { set: String, force_per_length: [f64; 3] },
+    /// A dead traction per unit reference area on a part (consistent nodal loads).
+    SurfaceTraction { part: String, traction: [f64; 3] },
+    /// Self-weight from areal density (mass per reference area) and gravity vector.
+    Gravity { part: String, areal_density: f64, g: [f64; 3] },
+    /// Prescribed translation of the set's nodes.
+    Displacement { set: String, dof: Dof, value: f64 },
+}
+
+/// A solution step: load scales ramped linearly over its increments.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StepSpec {
+    /// Step name.
+    pub name: String,
+    /// Nominal increments (results reported at each).
+    pub increments: usize,
+    /// Linear step: one Newton iteration from the current state (K u = f), no equilibrium
+    /// iterations; for small-displacement reference problems.
+    #[serde(default)]
+    pub linear: bool,
+    /// Scale of each load pattern at the end of the step; unnamed patterns keep the value
+    /// they had at the end of the previous step.
+    #[serde(default)]
+    pub scale: BTreeMap<String, f64>,
+}
+
+/// A monitored point: the node nearest to `point`, with the displacement components kept.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MonitorSpec {
+    /// Monitor name.
+    pub name: String,
+    /// Point in the reference configuration.
+    pub point: [f64; 3],
+    /// Restrict the search to one part.
+    #[serde(default)]
+    pub part: Option<String>,
+    /// Restrict the search to a node set (e.g. one side of a slit).
+    #[serde(default)]
+    pub set: Option<String>,
+    /// Displacement components recorded.
+    pub dofs: Vec<MonitorDof>,
+}
+
+/// Recorded quantities.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum MonitorDof {
+    Ux,
+    Uy,
+    Uz,
+    /// Displacement magnitude.
+    Umag,
+}
+
+/// Output controls.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct OutputSpec {
+    /// Write a VTU every this many nominal increments (the last of each step always).
+    pub every: usize,
+    /// Write VTU files at all.
+    pub vtu: bool,
+    /// Base64 binary VTU (false: ASCII).
+    pub binary: bool,
+    /// Plot monitored values against this load pattern's scale (default: the first
+    /// pattern scaled by the last step).
+    pub plot_against: Option<String>,
+}
+
+impl Default for OutputSpec {
+    fn default() -> Self {
+        Self { every: 1, vtu: true, binary: true, plot_against: None }
+    }
+}

@@ -1,0 +1,410 @@
+//! Incremental–iterative static solution (Crisfield 1991, ch. 3 and 9; Bathe 2014 §8.4).
+//!
+//! Each step ramps the load patterns' scales linearly from their values at the end of the
+//! previous step to the step's targets over a number of increments. In an increment the
+//! prescribed displacements are imposed, then Newton–Raphson iterates on the free DOFs
+//! with the consistent tangent until the residual and energy norms are small. A failed
+//! increment (no convergence, divergence, NaN, element inversion, singular tangent) is
+//! undone and halved; increments grow back after easy convergence.
+
+use std::time::Instant;
+
+use serde::Serialize;
+
+use super::linear::{FactorKind, SparseCholesky};
+use super::SolverSettings;
+use crate::assembly::{Assembler, AssemblyFailure};
+use crate::element::NODE_DOFS;
+use crate::model::{Model, State, FIXED};
+
+/// One step of the load history.
+#[derive(Clone, Debug)]
+pub struct StepPlan {
+    /// Step name.
+    pub name: String,
+    /// Nominal increments (results are reported at each).
+    pub increments: usize,
+    /// One Newton iteration per increment (linear analysis).
+    pub linear: bool,
+    /// Target scale per load pattern at the end of the step (same order as `Model::loads`).
+    pub target_scales: Vec<f64>,
+}
+
+/// Wall time split (s).
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct Timings {
+    /// Element evaluation and scatter.
+    pub assembly: f64,
+    /// Numeric factorization.
+    pub factorization: f64,
+    /// Triangular solves.
+    pub solve: f64,
+    /// Symbolic analysis (once).
+    pub analysis: f64,
+}
+
+/// A converged nominal increment.
+#[derive(Clone, Debug, Serialize)]
+pub struct IncrementReport {
+    /// Step index.
+    pub step: usize,
+    /// Step name.
+    pub step_name: String,
+    /// Nominal increment within the step (1-based).
+    pub increment: usize,
+    /// Pseudo-time: step index + fraction of the step completed.
+    pub time: f64,
+    /// Load scales reached.
+    pub scales: Vec<f64>,
+    /// Newton iterations used since the previous report (all sub-increments).
+    pub iterations: usize,
+    /// Relative residual norms of the last sub-increment's iterations.
+    pub residuals: Vec<f64>,
+    /// Cut-backs since the previous report.
+    pub cutbacks: usize,
+    /// Whether any tangent in this increment was not positive definite.
+    pub indefinite_tangent: bool,
+    /// Strain energy.
+    pub energy: f64,
+}
+
+/// Progress notification for a bar.
+#[derive(Clone, Debug)]
+pub struct Progress {
+    /// Step index.
+    pub step: usize,
+    /// Fraction of the whole analysis done.
+    pub fraction: f64,
+    /// Newton iteration in the current increment.
+    pub iteration: usize,
+    /// Current relative residual.
+    pub residual: f64,
+}
+
+/// Why a solve stopped.
+#[derive(Clone, Debug)]
+pub struct SolveError {
+    /// Step index.
+    pub step: usize,
+    /// Step name.
+    pub step_name: String,
+    /// Pseudo-time reached by the last converged state.
+    pub last_converged_time: f64,
+    /// Newton iteration at failure.
+    pub iteration: usize,
+    /// Relative residual history of the last attempt.
+    pub residuals: Vec<f64>,
+    /// Element with the largest residual near the worst node, or the failing element.
+    pub worst_element: Option<usize>,
+    /// Diagnosis.
+    pub cause: String,
+}
+
+impl std::fmt::Display for SolveError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "step {} '{}' failed after the last converged state at time {:.6}: {} (iteration {}, residual history [{}]",
+            self.step + 1,
+            self.step_name,
+            self.last_converged_time,
+            self.cause,
+            self.iteration,
+            self.residuals.iter().map(|r| format!("{r:.2e}")).collect::<Vec<_>>().join(", ")
+        )?;
+        match self.worst_element {
+            Some(e) => write!(f, "; worst element {e})"),
+            None => write!(f, ")"),
+        }
+    }
+}
+
+/// Outcome of one attempted increment.
+enum Attempt {
+    Converged { iterations: usize, residuals: Vec<f64>, indefinite: bool, energy: f64 },
+    Failed { iteration: usize, residuals: Vec<f64>, worst_element: Option<usize>, cause: String },
+}
+
+/// A static solver bound to one model.
+pub struct Solver<'m> {
+    model: &'m Model,
+    settings: SolverSettings,
+    assembler: Assembler,
+    cholesky: SparseCholesky,
+    values: Vec<f64>,
+    f_int: Vec<f64>,
+    f_ext: Vec<f64>,
+    /// Accumulated wall-time split.
+    pub timings: Timings,
+}
+
+impl<'m> Solver<'m> {
+    /// Builds the pattern and the symbolic factorization of `model`.
+    pub fn new(model: &'m Model, settings: SolverSettings) -> Result<Self, String> {
+        let threads = if settings.threads == 0 { rayon::current_num_threads() } else { settings.threads };
+        let t0 = Instant::now();
+        let assembler = Assembler::new(model);
+        let cholesky = SparseCholesky::analyse(&assembler.pattern, threads).map_err(|e| e.to_string())?;
+        let timings = Timings { analysis: t0.elapsed().as_secs_f64(), ..Default::default() };
+        let ndof = NODE_DOFS * model.n_nodes();
+        Ok(Self {
+            model,
+            settings,
+            values: vec![0.0; assembler.nnz()],
+            assembler,
+            cholesky,
+            f_int: vec![0.0; ndof],
+            f_ext: vec![0.0; ndof],
+            timings,
+        })
+    }
+
+    /// Equations, stored tangent entries (upper triangle) and factor entries.
+    pub fn sizes(&self) -> (usize, usize, usize) {
+        (self.assembler.pattern.n, self.assembler.nnz(), self.cholesky.factor_nnz())
+    }
+
+    /// Reactions and internal forces of the last assembly (all DOFs).
+    pub fn internal_force(&self) -> &[f64] {
+        &self.f_int
+    }
+
+    /// Free-DOF residual r = f_int − f_ext; returns (‖r‖ / reference, reference).
+    fn residual(&self, r: &mut [f64]) -> (f64, f64) {
+        let eq = &self.model.dofs.eq;
+        let mut rr = 0.0;
+        let mut fe = 0.0;
+        let mut fi = 0.0;
+        for (g, &e) in eq.iter().enumerate() {
+            fi += self.f_int[g] * self.f_int[g];
+            if e != FIXED {
+                r[e] = self.f_int[g] - self.f_ext[g];
+                rr += r[e] * r[e];
+                fe += self.f_ext[g] * self.f_ext[g];
+            }
+        }
+        let reference = fe.sqrt().max(fi.sqrt()).max(1e-300);
+        (rr.sqrt() / reference, reference)
+    }
+
+    fn assemble(&mut self, state: &State, scales: &[f64], tangent: bool) -> Result<f64, AssemblyFailure> {
+        let info = self.assembler.assemble(
+            self.model,
+            state,
+            &mut self.f_int,
+            if tangent { Some(&mut self.values) } else { None },
+        )?;
+        self.timings.assembly += info.seconds;
+        self.model.external_force(state, scales, &mut self.f_ext);
+        Ok(info.energy)
+    }
+
+    /// Element touching the node with the largest free residual.
+    fn worst_element(&self, r: &[f64]) -> Option<usize> {
+        let eq = &self.model.dofs.eq;
+        let mut best = (0.0, None);
+        for (g, &e) in eq.iter().enumerate() {
+            if e != FIXED && (r[e].abs() > best.0 || r[e].is_nan()) {
+                best = (r[e].abs(), Some(g / NODE_DOFS));
+                if r[e].is_nan() {
+                    break;
+                }
+            }
+        }
+        let node = best.1?;
+        self.model.elements.iter().position(|el| el.nodes.contains(&node))
+    }
+
+    /// Newton iterations for one increment ending at `scales`, starting from `state`.
+    fn attempt(&mut self, state: &mut State, scales: &[f64], linear: bool, progress: &mut dyn FnMut(usize, f64)) -> Attempt {
+        let n = self.model.dofs.n_free;
+        let mut r = vec![0.0; n];
+        let mut du = vec![0.0; n];
+        let mut residuals = Vec::new();
+        let mut indefinite = false;
+        let mut energy0 = None;
+        self.model.apply_prescribed(state, scales);
+        let fail = |it: usize, residuals: &Vec<f64>, el: Option<usize>, cause: String| Attempt::Failed {
+            iteration: it,
+            residuals: residuals.clone(),
+            worst_element: el,
+            cause,
+        };
+        let mut energy = match self.assemble(state, scales, true) {
+            Ok(e) => e,
+            Err(f) => return fail(0, &residuals, Some(f.element), format!("element {} failed: {}", f.element, f.failure)),
+        };
+        for it in 0..self.settings.max_iterations {
+            let (rel, _) = self.residual(&mut r);
+            residuals.push(rel);
+            progress(it, rel);
+            if !rel.is_finite() {
+                let el = self.worst_element(&r);
+                return fail(it, &residuals, el, "residual is NaN or infinite".into());
+            }
+            if it > 0 && linear {
+                return Attempt::Converged { iterations: it, residuals, indefinite, energy };
+            }
+            if it > 0 {
+                let e0: f64 = energy0.unwrap_or(1.0);
+                let de: f64 = du.iter().zip(&r).map(|(a, b)| a * b).sum::<f64>().abs();
+                if rel <= self.settings.residual_tol && (de <= self.settings.energy_tol * e0 || rel <= 1e-3 * self.settings.residual_tol) {
+                    return Attempt::Converged { iterations: it, residuals, indefinite, energy };
+                }
+                if it >= 3 && rel > 1e6 * residuals[0].max(1e-12) {
+                    let el = self.worst_element(&r);
+                    return fail(it, &residuals, el, "Newton diverging (residual grew a millionfold)".into());
+                }
+            }
+            // Solve K du = −r.
+            let t = Instant::now();
+            let kind = match self.cholesky.factorize(&self.values) {
+                Ok(k) => k,
+                Err(e) => {
+                    self.timings.factorization += t.elapsed().as_secs_f64();
+                    return fail(it, &residuals, None, format!("{e} (a mechanism: missing supports or an unconstrained node?)"));
+                }
+            };
+            self.timings.factorization += t.elapsed().as_secs_f64();
+            indefinite |= kind == FactorKind::Ldlt;
+            let t = Instant::now();
+            du.iter_mut().zip(&r).for_each(|(d, r)| *d = -r);
+            self.cholesky.solve(&mut du);
+            self.timings.solve += t.elapsed().as_secs_f64();
+            if du.iter().any(|v| !v.is_finite()) {
+                return fail(it, &residuals, None, "linear solve produced NaN (singular tangent)".into());
+            }
+            let g0: f64 = du.iter().zip(&r).map(|(a, b)| a * b).sum();
+            if energy0.is_none() {
+                energy0 = Some(g0.abs().max(1e-300));
+            }
+            // Full Newton step, safeguarded: back off (halving) only when the trial state
+            // fails (element inversion, plane-stress failure, NaN). Residual growth alone is
+            // no reason: large rotations legitimately raise it for an iteration or two, and
+            // divergence is caught by the iteration limit and cut-back.
+            let base = state.clone();
+            let mut step = 1.0;
+            let mut accepted = false;
+            let mut last_failure = None;
+            for _ in 0..6 {
+                *state = base.clone();
+                self.model.update(state, &du, step);
+                match self.assemble(state, scales, true) {
+                    Ok(e) => {
+                        energy = e;
+                        let (rel, _) = self.residual(&mut r);
+                        if rel.is_finite() {
+                            accepted = true;
+                            break;
+                        }
+                    }
+                    Err(f) => last_failure = Some(f),
+                }
+                if !self.settings.line_search {
+                    break;
+                }
+                step *= 0.5;
+            }
+            if !accepted {
+                *state = base;
+                return match last_failure {
+                    Some(f) => fail(it, &residuals, Some(f.element), format!("element {} failed: {}", f.element, f.failure)),
+                    None => {
+                        let el = self.worst_element(&r);
+                        fail(it, &residuals, el, "line search found no finite state".into())
+                    }
+                };
+            }
+        }
+        let (rel, _) = self.residual(&mut r);
+        residuals.push(rel);
+        let el = self.worst_element(&r);
+        fail(self.settings.max_iterations, &residuals, el, format!("no convergence in {} iterations", self.settings.max_iterations))
+    }
+
+    /// Runs all steps from `state`. `on_increment` receives each converged nominal increment
+    /// with its state; `progress` is told about every iteration. On failure `state` holds
+    /// the last converged configuration.
+    pub fn run(
+        &mut self,
+        steps: &[StepPlan],
+        state: &mut State,
+        on_increment: &mut dyn FnMut(&IncrementReport, &State, &Self),
+        progress: &mut dyn FnMut(&Progress),
+    ) -> Result<(), SolveError> {
+        let nl = self.model.loads.len();
+        let mut scales = vec![0.0; nl];
+        let total: usize = steps.iter().map(|s| s.increments.max(1)).sum();
+        let mut done_before = 0usize;
+        for (si, step) in steps.iter().enumerate() {
+            let start = scales.clone();
+            let n_inc = step.increments.max(1);
+            let at = |tau: f64| -> Vec<f64> { start.iter().zip(&step.target_scales).map(|(a, b)| a + tau * (b - a)).collect() };
+            let mut tau = 0.0;
+            let mut dtau = 1.0 / n_inc as f64;
+            let mut cutback_level = 0usize;
+            for inc in 1..=n_inc {
+                let goal = inc as f64 / n_inc as f64;
+                let mut iterations = 0;
+                let mut cutbacks = 0;
+                let mut indefinite = false;
+                loop {
+                    let next = (tau + dtau).min(goal);
+                    let trial_scales = at(next);
+                    let saved = state.clone();
+                    let frac = (done_before as f64 + next * n_inc as f64) / total as f64;
+                    let mut report_progress = |it: usize, res: f64| progress(&Progress { step: si, fraction: frac, iteration: it, residual: res });
+                    match self.attempt(state, &trial_scales, step.linear, &mut report_progress) {
+                        Attempt::Converged { iterations: its, residuals, indefinite: ind, energy } => {
+                            iterations += its;
+                            indefinite |= ind;
+                            tau = next;
+                            scales = trial_scales;
+                            if its <= 6 && cutback_level > 0 {
+                                cutback_level -= 1;
+                                dtau *= 2.0;
+                            }
+                            if (tau - goal).abs() < 1e-12 {
+                                tau = goal;
+                                let report = IncrementReport {
+                                    step: si,
+                                    step_name: step.name.clone(),
+                                    increment: inc,
+                                    time: si as f64 + tau,
+                                    scales: scales.clone(),
+                                    iterations,
+                                    residuals,
+                                    cutbacks,
+                                    indefinite_tangent: indefinite,
+                                    energy,
+                                };
+                                on_increment(&report, state, self);
+                                break;
+                            }
+                        }
+                        Attempt::Failed { iteration, residuals, worst_element, cause } => {
+                            *state = saved;
+                            iterations += iteration;
+                            if cutback_level >= self.settings.max_cutbacks {
+                                return Err(SolveError {
+                                    step: si,
+                                    step_name: step.name.clone(),
+                                    last_converged_time: si as f64 + tau,
+                                    iteration,
+                                    residuals,
+                                    worst_element,
+                                    cause: format!("{cause}; increment cut back {} times", cutback_level),
+                                });
+                            }
+                            cutback_level += 1;
+                            cutbacks += 1;
+                            dtau *= 0.5;
+                        }
+                    }
+                }
+            }
+            done_before += n_inc;
+        }
+        Ok(())
+    }
+}
