@@ -13,9 +13,11 @@ use serde::{Deserialize, Serialize};
 pub struct SolverSettings {
     /// Newton iterations allowed per increment before a cut-back.
     pub max_iterations: usize,
-    /// Converged when ‖r‖ ≤ residual_tol · max(‖f_ext‖, ‖f_int‖ incl. reactions) ...
+    /// Converged when ‖r‖ ≤ residual_tol · max(‖f_ext‖, ‖f_int‖ incl. reactions) and the
+    /// energy criterion holds; or when ‖r‖ is a thousand times below that; or when the energy
+    /// criterion holds with ‖r‖ within a thousandfold of it (residual at round-off floor).
     pub residual_tol: f64,
-    /// ... and |Δu·r| ≤ energy_tol · |Δu₀·r₀| (energy norm, first iteration of the increment).
+    /// Energy criterion: |Δu·r| ≤ energy_tol · |Δu₀·r₀| (first iteration of the increment).
     pub energy_tol: f64,
     /// Backtracking line search on the energy product Δu·r(s).
     pub line_search: bool,
