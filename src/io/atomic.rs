@@ -66,7 +66,11 @@ fn create_temp(dir: &Path, file_name: &std::ffi::OsStr) -> io::Result<(PathBuf, 
         name.push(file_name);
         name.push(format!(".{pid}.{n}.tmp"));
         let tmp_path = dir.join(name);
-        match OpenOptions::new().write(true).create_new(true).open(&tmp_path) {
+        match OpenOptions::new()
+            .write(true)
+            .create_new(true)
+            .open(&tmp_path)
+        {
             Ok(f) => return Ok((tmp_path, f)),
             Err(e) if e.kind() == io::ErrorKind::AlreadyExists => last_err = Some(e),
             Err(e) => {

@@ -19,20 +19,26 @@ use super::vtu::{push_f64, xml_escape};
 pub fn pvd_string(entries: &[(f64, String)]) -> Result<String, String> {
     let mut out = String::new();
     out.push_str("<?xml version=\"1.0\"?>\n");
-    out.push_str(
-        "<VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">\n",
-    );
+    out.push_str("<VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">\n");
     out.push_str("  <Collection>\n");
     for (i, (t, file)) in entries.iter().enumerate() {
         if !t.is_finite() {
-            return Err(format!("PVD entry {i} ('{file}') has a non-finite timestep {t}"));
+            return Err(format!(
+                "PVD entry {i} ('{file}') has a non-finite timestep {t}"
+            ));
         }
         if file.trim().is_empty() {
-            return Err(format!("PVD entry {i} (timestep {t}) has an empty file name"));
+            return Err(format!(
+                "PVD entry {i} (timestep {t}) has an empty file name"
+            ));
         }
         out.push_str("    <DataSet timestep=\"");
         push_f64(&mut out, *t);
-        let _ = writeln!(out, "\" group=\"\" part=\"0\" file=\"{}\"/>", xml_escape(file));
+        let _ = writeln!(
+            out,
+            "\" group=\"\" part=\"0\" file=\"{}\"/>",
+            xml_escape(file)
+        );
     }
     out.push_str("  </Collection>\n");
     out.push_str("</VTKFile>\n");
@@ -69,7 +75,9 @@ mod tests {
         ];
         let s = pvd_string(&entries).expect("valid");
         assert!(s.contains("type=\"Collection\""));
-        assert!(s.contains("<DataSet timestep=\"0\" group=\"\" part=\"0\" file=\"step_0000.vtu\"/>"));
+        assert!(
+            s.contains("<DataSet timestep=\"0\" group=\"\" part=\"0\" file=\"step_0000.vtu\"/>")
+        );
         assert!(s.contains("timestep=\"0.25\""));
         assert!(s.contains("timestep=\"1e-9\" group=\"\" part=\"0\" file=\"a&amp;b.vtu\""));
         assert_eq!(s.matches("<DataSet").count(), 3);

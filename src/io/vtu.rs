@@ -107,7 +107,10 @@ pub fn vtu_string(mesh: &VtuMesh, binary: bool) -> Result<String, String> {
 
     let n_points = mesh.points.len();
     let n_cells = mesh.num_cells();
-    let mut w = XmlOut { out: String::new(), binary };
+    let mut w = XmlOut {
+        out: String::new(),
+        binary,
+    };
 
     w.out.push_str("<?xml version=\"1.0\"?>\n");
     w.out.push_str(
@@ -128,7 +131,8 @@ pub fn vtu_string(mesh: &VtuMesh, binary: bool) -> Result<String, String> {
 
     // Cells.
     w.out.push_str("      <Cells>\n");
-    let mut connectivity: Vec<i64> = Vec::with_capacity(4 * mesh.quads.len() + 2 * mesh.lines.len());
+    let mut connectivity: Vec<i64> =
+        Vec::with_capacity(4 * mesh.quads.len() + 2 * mesh.lines.len());
     let mut offsets: Vec<i64> = Vec::with_capacity(n_cells);
     let mut types: Vec<u8> = Vec::with_capacity(n_cells);
     for q in mesh.quads {
@@ -196,18 +200,17 @@ fn validate(mesh: &VtuMesh, binary: bool) -> Result<(), String> {
     let n_points = mesh.points.len();
     let n_cells = mesh.num_cells();
 
-    if !binary {
-        if let Some((i, p)) = mesh
+    if !binary
+        && let Some((i, p)) = mesh
             .points
             .iter()
             .enumerate()
             .find(|(_, p)| p.iter().any(|c| !c.is_finite()))
-        {
-            return Err(format!(
-                "point {i} has a non-finite coordinate {p:?}; ASCII VTU cannot store it \
-                 (use binary output)"
-            ));
-        }
+    {
+        return Err(format!(
+            "point {i} has a non-finite coordinate {p:?}; ASCII VTU cannot store it \
+             (use binary output)"
+        ));
     }
 
     for (c, q) in mesh.quads.iter().enumerate() {
@@ -274,9 +277,9 @@ fn check_float_array<'a>(
     if a.components == 0 {
         return Err(format!("{kind} array '{}' has 0 components", a.name));
     }
-    let expected = n.checked_mul(a.components).ok_or_else(|| {
-        format!("{kind} array '{}': size overflow", a.name)
-    })?;
+    let expected = n
+        .checked_mul(a.components)
+        .ok_or_else(|| format!("{kind} array '{}': size overflow", a.name))?;
     if a.values.len() != expected {
         return Err(format!(
             "{kind} array '{}' has {} values, expected {expected} ({n} {what} x {} components)",
@@ -285,16 +288,14 @@ fn check_float_array<'a>(
             a.components
         ));
     }
-    if !binary {
-        if let Some((i, v)) = a.values.iter().enumerate().find(|(_, v)| !v.is_finite()) {
-            return Err(format!(
-                "{kind} array '{}' has a non-finite value {v} at tuple {}, component {}; \
-                 ASCII VTU cannot store it (use binary output)",
-                a.name,
-                i / a.components,
-                i % a.components
-            ));
-        }
+    if !binary && let Some((i, v)) = a.values.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+        return Err(format!(
+            "{kind} array '{}' has a non-finite value {v} at tuple {}, component {}; \
+             ASCII VTU cannot store it (use binary output)",
+            a.name,
+            i / a.components,
+            i % a.components
+        ));
     }
     Ok(())
 }
@@ -450,8 +451,16 @@ mod tests {
             points: &POINTS,
             quads: &QUADS,
             lines: &LINES,
-            point_data: vec![DataArray { name: "displacement", components: 3, values: d }],
-            cell_data: vec![DataArray { name: "energy_density", components: 1, values: e }],
+            point_data: vec![DataArray {
+                name: "displacement",
+                components: 3,
+                values: d,
+            }],
+            cell_data: vec![DataArray {
+                name: "energy_density",
+                components: 1,
+                values: e,
+            }],
             int_cell_data: vec![("part", vec![1, 2, 7])],
         }
     }
@@ -479,7 +488,10 @@ mod tests {
         let e = [1.5, 2.5e-7, 3.0];
         let s = vtu_string(&mesh(&d, &e), false).expect("valid");
         assert!(s.contains("NumberOfPoints=\"6\" NumberOfCells=\"3\""));
-        assert_eq!(array_text(&s, "Name=\"connectivity\""), "0 1 4 3 1 2\n          5 4 3 4");
+        assert_eq!(
+            array_text(&s, "Name=\"connectivity\""),
+            "0 1 4 3 1 2\n          5 4 3 4"
+        );
         assert_eq!(array_text(&s, "Name=\"offsets\""), "4 8 10");
         assert_eq!(array_text(&s, "Name=\"types\""), "9 9 3");
         assert_eq!(array_text(&s, "Name=\"energy_density\""), "1.5 2.5e-7 3");
@@ -526,7 +538,19 @@ mod tests {
 
     #[test]
     fn float_format_round_trips() {
-        for v in [0.0, -0.0, 1.0, 0.1, 1e-4, 9.99e-5, 1e15, 123456.789, -2.5e-300, f64::MAX, f64::MIN_POSITIVE] {
+        for v in [
+            0.0,
+            -0.0,
+            1.0,
+            0.1,
+            1e-4,
+            9.99e-5,
+            1e15,
+            123456.789,
+            -2.5e-300,
+            f64::MAX,
+            f64::MIN_POSITIVE,
+        ] {
             let mut s = String::new();
             push_f64(&mut s, v);
             assert!(s.len() < 30, "{s}");
@@ -541,10 +565,16 @@ mod tests {
 
         let short = &d[..17];
         let err = vtu_string(&mesh(short, &e), true).expect_err("short point data");
-        assert!(err.contains("'displacement'") && err.contains("expected 18"), "{err}");
+        assert!(
+            err.contains("'displacement'") && err.contains("expected 18"),
+            "{err}"
+        );
 
         let err = vtu_string(&mesh(&d, &e[..2]), true).expect_err("short cell data");
-        assert!(err.contains("'energy_density'") && err.contains("expected 3"), "{err}");
+        assert!(
+            err.contains("'energy_density'") && err.contains("expected 3"),
+            "{err}"
+        );
 
         let mut m = mesh(&d, &e);
         m.int_cell_data[0].1.pop();
@@ -552,13 +582,24 @@ mod tests {
         assert!(err.contains("'part'"), "{err}");
 
         let mut m = mesh(&d, &e);
-        m.cell_data.push(DataArray { name: "part", components: 1, values: &e });
+        m.cell_data.push(DataArray {
+            name: "part",
+            components: 1,
+            values: &e,
+        });
         let err = vtu_string(&m, false).expect_err("duplicate");
-        assert!(err.contains("'part'") && err.contains("more than once"), "{err}");
+        assert!(
+            err.contains("'part'") && err.contains("more than once"),
+            "{err}"
+        );
 
         let mut m = mesh(&d, &e);
         m.point_data[0].components = 0;
-        assert!(vtu_string(&m, false).expect_err("0 comps").contains("0 components"));
+        assert!(
+            vtu_string(&m, false)
+                .expect_err("0 comps")
+                .contains("0 components")
+        );
 
         let bad_quads = [[0, 1, 4, 6]];
         let mut m = mesh(&d, &e);
@@ -568,7 +609,10 @@ mod tests {
 
         let e_nan = [1.0, f64::INFINITY, 3.0];
         let err = vtu_string(&mesh(&d, &e_nan), false).expect_err("nan in ascii");
-        assert!(err.contains("'energy_density'") && err.contains("tuple 1"), "{err}");
+        assert!(
+            err.contains("'energy_density'") && err.contains("tuple 1"),
+            "{err}"
+        );
         assert!(vtu_string(&mesh(&d, &e_nan), true).is_ok());
     }
 
@@ -576,7 +620,11 @@ mod tests {
     fn empty_mesh_and_escaping() {
         let e: [f64; 0] = [];
         let m = VtuMesh {
-            point_data: vec![DataArray { name: "a<&\"b\">", components: 2, values: &e }],
+            point_data: vec![DataArray {
+                name: "a<&\"b\">",
+                components: 2,
+                values: &e,
+            }],
             ..Default::default()
         };
         for binary in [false, true] {
