@@ -3,7 +3,8 @@
 
 use nalgebra::Vector3;
 
-use crate::model::{Model, State};
+use crate::element::NODE_DOFS;
+use crate::model::{Model, State, FIXED};
 
 /// The element with the smallest corner-Jacobian ratio min_a J_a / max_a J_a in `state`,
 /// where J_a = ((x_{a+1} − x_a) × (x_{a−1} − x_a)) · n̄ and n̄ is the mean current director
@@ -44,14 +45,80 @@ pub fn likely_cause(cause: &str, indefinite: bool) -> &'static str {
     }
 }
 
+/// Global directions (x, y, z) along which no node's translation is fixed or prescribed:
+/// the model can move rigidly along them (a mechanism).
+pub fn unsupported_directions(model: &Model) -> Vec<&'static str> {
+    let eq = &model.dofs.eq;
+    ["x", "y", "z"]
+        .into_iter()
+        .enumerate()
+        .filter(|&(k, _)| !(0..model.n_nodes()).any(|n| eq[NODE_DOFS * n + k] == FIXED))
+        .map(|(_, name)| name)
+        .collect()
+}
+
 /// The failure message extended with the most distorted element of `state` and the
-/// likely cause.
+/// likely cause (a mechanism when a direction has no support at all).
 pub fn explain(model: &Model, state: &State, cause: &str, indefinite: bool) -> String {
     let mut s = cause.to_string();
     if let Some((e, r)) = worst_distortion(model, state) {
-        s.push_str(&format!("; most distorted element {e} (corner Jacobian ratio {r:.3})"));
+        if r.is_finite() {
+            s.push_str(&format!("; most distorted element {e} (corner Jacobian ratio {r:.3})"));
+        } else {
+            s.push_str(&format!("; element {e} is inverted or not finite"));
+        }
     }
-    s.push_str("; ");
-    s.push_str(likely_cause(cause, indefinite));
+    let free = unsupported_directions(model);
+    if free.is_empty() {
+        s.push_str("; ");
+        s.push_str(likely_cause(cause, indefinite));
+    } else {
+        s.push_str(&format!(
+            "; likely cause: a mechanism — no support restrains rigid motion along {}; add supports (a Dynamic step lets it move under its loads)",
+            free.join(", ")
+        ));
+    }
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene;
+
+    fn strip(boundary: &str) -> scene::BuiltScene {
+        let text = format!(
+            r#"Scene(name: "s", materials: {{"m": StVenantKirchhoff(young: 1.0e6, poisson: 0.0)}},
+            parts: [(name: "p", mesh: Rectangle(lx: 4.0, ly: 1.0, nx: 4, ny: 1), material: "m", thickness: 0.1)],
+            node_sets: {{"root": Edge(part: "p", edge: "xmin")}}, boundary: [{boundary}],
+            steps: [(name: "a", increments: 1)])"#
+        );
+        let sc = scene::parse("s.ron", &text).unwrap();
+        scene::build(&sc, "s.ron", &text).unwrap()
+    }
+
+    #[test]
+    fn distortion_ratio_is_one_for_rectangles_and_negative_for_an_inverted_element() {
+        let b = strip("Clamp(set: \"root\")");
+        let mut st = b.model.initial_state();
+        let (_, r) = worst_distortion(&b.model, &st).unwrap();
+        assert!((r - 1.0).abs() < 1e-12);
+        // Push node 1 (x = 1, y = 0) past node 0's far side: element 0 folds over.
+        st.u[1].x = -2.0;
+        let (e, r) = worst_distortion(&b.model, &st).unwrap();
+        assert_eq!(e, 0);
+        assert!(r < 0.0, "ratio {r}");
+    }
+
+    #[test]
+    fn an_unsupported_model_is_diagnosed_as_a_mechanism() {
+        let b = strip("");
+        assert_eq!(unsupported_directions(&b.model), vec!["x", "y", "z"]);
+        let msg = explain(&b.model, &b.model.initial_state(), "no convergence in 30 iterations", true);
+        assert!(msg.contains("a mechanism") && msg.contains("x, y, z"), "{msg}");
+        let b = strip("Clamp(set: \"root\")");
+        assert!(unsupported_directions(&b.model).is_empty());
+        let msg = explain(&b.model, &b.model.initial_state(), "element 3 failed: material inverted (det C = -1)", false);
+        assert!(msg.contains("element inversion"), "{msg}");
+    }
 }

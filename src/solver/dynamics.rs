@@ -330,7 +330,7 @@ impl<'m> Solver<'m> {
         let error = |iteration: usize, residuals: Vec<f64>, worst_element: Option<usize>, cause: String, t: f64| SolveError {
             step: si,
             step_name: step.name.clone(),
-            last_converged_time: si as f64 + (t / ds.max_time).min(1.0),
+            last_converged_time: si as f64 + (t / ds.max_time).min(0.999_999),
             iteration,
             residuals,
             worst_element,
