@@ -104,3 +104,54 @@ fn hanging_cloth_comes_to_rest_in_static_equilibrium() {
         assert!((dz + l).abs() <= 0.01 * l, "free corner at depth {dz}, expected about −L");
     }
 }
+
+/// Lumped mass (row sums of the consistent mass): the total is ρ_A × area exactly, and the
+/// corner node of a regular mesh carries a quarter of an element's mass.
+#[test]
+fn lumped_mass_sums_to_the_areal_density_times_the_area() {
+    use plyshell::solver::LumpedMass;
+    let sc = scene::parse("hanging_cloth.ron", HANGING_CLOTH).expect("scene");
+    let built = scene::build(&sc, "hanging_cloth.ron", HANGING_CLOTH).expect("build");
+    let mass = LumpedMass::from_model(&built.model, 1.0);
+    let exact = 0.2 * 0.4 * 0.4;
+    assert!((mass.total() - exact).abs() < 1e-14, "{} vs {exact}", mass.total());
+    let corner = built.monitors[0].node;
+    assert!((mass.translational[corner] - exact / 256.0 / 4.0).abs() < 1e-15);
+    // Director inertia ρ_A h²/12 per area.
+    let h: f64 = 3.3045e-4;
+    assert!((mass.rotary.iter().sum::<f64>() - exact * h * h / 12.0).abs() < 1e-18);
+}
+
+/// The pseudo-transient step keeps the equilibria of the static problem: the end-shear
+/// cantilever of Sze et al. (2004) §3.1 (P L²/EI = 4, 16×1) solved by a Dynamic step with the
+/// full load at once, and by the StaticDamped (Levenberg–Marquardt) step in 5 increments,
+/// lands on the tip of the 20-increment static Newton solve within 1e-6 L.
+#[test]
+fn dynamic_and_damped_steps_reach_the_static_equilibrium() {
+    use plyshell::bench::{scenes, solve_variant};
+    let reference = solve_variant(scenes::END_SHEAR, "end_shear", &[]).expect("static");
+    let tip_ref = reference.monitors[0].values.last().expect("tip").clone();
+    let variants = [
+        ("Dynamic", "(name: \"load\", kind: Dynamic((dt: 0.01, dt_max: 1e3, rest_residual_tol: 1e-9)), increments: 1,"),
+        ("StaticDamped", "(name: \"load\", kind: StaticDamped, increments: 5,"),
+    ];
+    for (name, step) in variants {
+        let t = Instant::now();
+        let s = solve_variant(
+            scenes::END_SHEAR,
+            name,
+            &[("(name: \"load\", increments: 20,", step.to_string()), ("thickness: 0.1)", "thickness: 0.1, areal_density: 1.0)".into())],
+        )
+        .unwrap_or_else(|e| panic!("{name}: {e}"));
+        let tip = s.monitors[0].values.last().expect("tip");
+        let err = ((tip[0] - tip_ref[0]).powi(2) + (tip[1] - tip_ref[1]).powi(2)).sqrt() / 10.0;
+        let rejected: usize = s.increments.iter().map(|i| i.cutbacks).sum();
+        println!(
+            "end shear by {name}: {} reports ({rejected} rejected/cut back), {} Newton iterations, {:.2} s, tip {tip:?} vs static {tip_ref:?}, error {err:.1e} L",
+            s.increments.len(),
+            s.newton_iterations,
+            t.elapsed().as_secs_f64()
+        );
+        assert!(err < 1e-6, "{name}: tip {tip:?} vs {tip_ref:?}");
+    }
+}
