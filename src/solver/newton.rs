@@ -116,13 +116,19 @@ impl std::fmt::Display for SolveError {
             self.last_converged_time,
             self.cause,
             self.iteration,
-            self.residuals.iter().map(|r| format!("{r:.2e}")).collect::<Vec<_>>().join(", ")
+            residual_history(&self.residuals)
         )?;
         match self.worst_element {
             Some(e) => write!(f, "; worst element {e})"),
             None => write!(f, ")"),
         }
     }
+}
+
+/// The residual history for a message: all of it, or the first 4 and last 10 values.
+fn residual_history(r: &[f64]) -> String {
+    let f = |v: &[f64]| v.iter().map(|x| format!("{x:.2e}")).collect::<Vec<_>>().join(", ");
+    if r.len() <= 16 { f(r) } else { format!("{}, … {} more …, {}", f(&r[..4]), r.len() - 14, f(&r[r.len() - 10..])) }
 }
 
 /// Outcome of one attempted increment.
