@@ -11,7 +11,9 @@
 //! steps, so the iteration turns into Newton's method as the motion dies out, and is cut
 //! back when Newton fails or the effective tangent is not positive definite. The step stops
 //! when the kinetic energy and the static residual ‖f_int − f_ext‖ are both below their
-//! tolerances.
+//! tolerances and (by default) the static tangent is positive definite there, so that an
+//! unstable equilibrium (a saddle, e.g. a flat sheet past its wrinkling threshold) is left
+//! along its unstable mode instead of being reported as rest.
 //!
 //! Mass is lumped (row sums of the consistent mass, i.e. the nodal area weights ∫N_a dA
 //! times the part's areal density ρ_A). Director tilts carry the fibre's rotary inertia
@@ -62,6 +64,9 @@ pub struct DynamicSettings {
     pub grow: f64,
     /// Newton iterations per time step before it is retried with Δt/4.
     pub max_iterations: usize,
+    /// Rest also requires a stable equilibrium: the static tangent K, shifted by 1e-10·diag|K|
+    /// against round-off, factors as LLᵀ.
+    pub require_stable: bool,
 }
 
 impl Default for DynamicSettings {
@@ -79,6 +84,7 @@ impl Default for DynamicSettings {
             rest_residual_tol: 1e-6,
             grow: 1.5,
             max_iterations: 12,
+            require_stable: true,
         }
     }
 }
@@ -99,6 +105,9 @@ pub struct DynamicInfo {
     /// Time steps rejected (Newton failure or indefinite effective tangent) since the
     /// previous report.
     pub rejected: usize,
+    /// Time steps so far in this step that met the rest criteria at an unstable
+    /// equilibrium (static tangent not positive definite) and were not accepted as rest.
+    pub unstable_rests: usize,
 }
 
 /// Lumped nodal masses of a model.
@@ -300,6 +309,24 @@ impl<'m> Solver<'m> {
         }
     }
 
+    /// Whether `state` is a stable equilibrium candidate: K + 1e-10·diag|K| (static tangent
+    /// at load scales `scales`) is positive definite (Lyapunov/Dirichlet: a strict minimum
+    /// of the potential energy).
+    fn stable(&mut self, state: &State, scales: &[f64]) -> bool {
+        if self.assemble(state, scales, true).is_err() {
+            return false;
+        }
+        let col_ptr = &self.assembler.pattern.col_ptr;
+        for c in 0..self.model.dofs.n_free {
+            let p = col_ptr[c + 1] - 1;
+            self.values[p] += 1e-10 * self.values[p].abs();
+        }
+        let t = Instant::now();
+        let kind = self.cholesky.factorize(&self.values);
+        self.timings.factorization += t.elapsed().as_secs_f64();
+        matches!(kind, Ok(FactorKind::Llt))
+    }
+
     /// Relative static residual ‖f_int − f_ext‖ / max(‖f_ext‖, ‖f_int‖) of `state` at load
     /// scales `scales` (prescribed values applied first); reactions are then available from
     /// [`Solver::internal_force`].
@@ -360,6 +387,7 @@ impl<'m> Solver<'m> {
         let mut dt = ds.dt;
         let mut rejected = 0usize;
         let mut iterations = 0usize;
+        let mut unstable_rests = 0usize;
         for k in 1..=ds.max_steps {
             let scales = at(t + dt);
             let mut report_progress = |it: usize, res: f64| {
@@ -382,7 +410,13 @@ impl<'m> Solver<'m> {
                     let work: f64 = (0..nn).map(|n| (0..3).map(|c| self.f_ext[NODE_DOFS * n + c] * state.u[n][c]).sum::<f64>()).sum();
                     let e_ref = energy.abs().max(work.abs()).max(1e-300);
                     t += dt;
-                    let at_rest = t >= ds.ramp_time && ke <= ds.kinetic_tol * e_ref && static_residual <= ds.rest_residual_tol;
+                    let still = t >= ds.ramp_time && ke <= ds.kinetic_tol * e_ref && static_residual <= ds.rest_residual_tol;
+                    // A saddle (e.g. a flat sheet past its wrinkling threshold) is no rest state:
+                    // integration goes on and the unstable mode grows from round-off.
+                    let at_rest = still && (!ds.require_stable || self.stable(state, &scales));
+                    if still && !at_rest {
+                        unstable_rests += 1;
+                    }
                     let report = IncrementReport {
                         step: si,
                         step_name: step.name.clone(),
@@ -394,7 +428,7 @@ impl<'m> Solver<'m> {
                         cutbacks: rejected,
                         indefinite_tangent: false,
                         energy,
-                        dynamics: Some(DynamicInfo { time: t, dt, kinetic_energy: ke, static_residual, at_rest, rejected }),
+                        dynamics: Some(DynamicInfo { time: t, dt, kinetic_energy: ke, static_residual, at_rest, rejected, unstable_rests }),
                     };
                     on_increment(&report, state, self);
                     if at_rest {
