@@ -155,3 +155,23 @@ fn dynamic_and_damped_steps_reach_the_static_equilibrium() {
         assert!(err < 1e-6, "{name}: tip {tip:?} vs {tip_ref:?}");
     }
 }
+
+/// Step kinds in the scene: `Dynamic(())` takes every default, `StaticDamped` is a unit
+/// variant, and an invalid Dynamic setting is reported at its line and column with the field.
+#[test]
+fn step_kinds_parse_and_bad_settings_are_located() {
+    use plyshell::solver::DynamicSettings;
+    let with = |kind: &str| HANGING_CLOTH.replace("kind: Dynamic((dt: 1e-3, dt_max: 10.0, max_steps: 2000, mass_damping: 5.0))", kind);
+    let text = with("kind: Dynamic(())");
+    let sc = scene::parse("a.ron", &text).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(sc.steps[0].kind, StepKind::Dynamic(DynamicSettings::default()));
+    let text = with("kind: StaticDamped");
+    let sc = scene::parse("a.ron", &text).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(sc.steps[0].kind, StepKind::StaticDamped);
+    let text = with("kind: Dynamic((dt: 1e-3,\n dt_max: 1e-4))");
+    let sc = scene::parse("a.ron", &text).unwrap_or_else(|e| panic!("{e}"));
+    let err = scene::build(&sc, "a.ron", &text).expect_err("dt_max < dt");
+    let line = text.lines().position(|l| l.contains("dt_max: 1e-4")).expect("line") + 1;
+    assert_eq!(err.line, line, "{err}");
+    assert!(err.field.ends_with("kind.dt_max") && err.message.contains("largest time step"), "{err}");
+}

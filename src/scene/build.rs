@@ -342,6 +342,11 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
         if s.increments == 0 {
             return Err(loc.at(Some(&s.name), Some("increments"), format!("{field}.increments"), "expected at least one increment"));
         }
+        if let crate::solver::StepKind::Dynamic(ds) = &s.kind {
+            if let Some((key, msg)) = crate::solver::dynamics::check_settings(ds) {
+                return Err(loc.at(Some(&s.name), Some(key), format!("{field}.kind.{key}"), msg));
+            }
+        }
         for (lname, &v) in &s.scale {
             let Some(i) = loads.iter().position(|l| &l.name == lname) else {
                 let known: Vec<&str> = loads.iter().map(|l| l.name.as_str()).collect();

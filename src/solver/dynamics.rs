@@ -89,6 +89,38 @@ impl Default for DynamicSettings {
     }
 }
 
+/// The first invalid field of `ds` and what is expected there, if any.
+pub fn check_settings(ds: &DynamicSettings) -> Option<(&'static str, &'static str)> {
+    let pos = |x: f64| x.is_finite() && x > 0.0;
+    if !pos(ds.dt) {
+        Some(("dt", "expected a positive first time step"))
+    } else if !pos(ds.dt_min) || ds.dt_min > ds.dt {
+        Some(("dt_min", "expected a positive smallest time step no larger than dt"))
+    } else if !(ds.dt_max >= ds.dt) {
+        Some(("dt_max", "expected a largest time step no smaller than dt"))
+    } else if !(ds.ramp_time.is_finite() && ds.ramp_time >= 0.0) {
+        Some(("ramp_time", "expected a non-negative ramp time"))
+    } else if !pos(ds.max_time) {
+        Some(("max_time", "expected a positive maximum time"))
+    } else if ds.max_steps == 0 {
+        Some(("max_steps", "expected at least one time step"))
+    } else if !(ds.mass_damping.is_finite() && ds.mass_damping >= 0.0) {
+        Some(("mass_damping", "expected a non-negative damping coefficient (1/time)"))
+    } else if !(ds.rotary_inertia.is_finite() && ds.rotary_inertia >= 0.0) {
+        Some(("rotary_inertia", "expected a non-negative scale"))
+    } else if !pos(ds.kinetic_tol) {
+        Some(("kinetic_tol", "expected a positive tolerance"))
+    } else if !pos(ds.rest_residual_tol) {
+        Some(("rest_residual_tol", "expected a positive tolerance"))
+    } else if !(ds.grow.is_finite() && ds.grow >= 1.0) {
+        Some(("grow", "expected a growth factor of at least 1"))
+    } else if ds.max_iterations == 0 {
+        Some(("max_iterations", "expected at least one iteration"))
+    } else {
+        None
+    }
+}
+
 /// Time-integration data of one accepted time step, reported with the increment.
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct DynamicInfo {
@@ -364,8 +396,8 @@ impl<'m> Solver<'m> {
             worst_element,
             cause,
         };
-        if !(ds.dt > 0.0 && ds.dt_min > 0.0 && ds.dt_max >= ds.dt && ds.grow >= 1.0) {
-            return Err(error(0, vec![], None, format!("invalid Dynamic settings: need 0 < dt_min, 0 < dt ≤ dt_max, grow ≥ 1 (got {ds:?})"), 0.0));
+        if let Some((key, msg)) = check_settings(ds) {
+            return Err(error(0, vec![], None, format!("invalid Dynamic setting {key}: {msg}"), 0.0));
         }
         let free_mass = model.dofs.eq.iter().enumerate().any(|(g, &e)| e != FIXED && g % NODE_DOFS < 3 && mass.translational[g / NODE_DOFS] > 0.0);
         if !free_mass {
