@@ -40,6 +40,29 @@ pub struct Scene {
     /// Solver controls.
     #[serde(default)]
     pub solver: SolverSettings,
+    /// Geometric imperfection seeded into the reference geometry before the solve.
+    #[serde(default)]
+    pub imperfection: Option<ImperfectionSpec>,
+}
+
+/// Geometric imperfections (added to the reference mid-surface and directors).
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum ImperfectionSpec {
+    /// Buckling modes of the perfect geometry: a linearized buckling analysis at the
+    /// reference state under the load patterns scaled by `scale`; mode k (from 1) is added
+    /// scaled to a largest translation of `amplitude` (a length).
+    BucklingModes { scale: BTreeMap<String, f64>, modes: Vec<ModeAmplitude> },
+}
+
+/// One mode of a buckling-mode imperfection.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ModeAmplitude {
+    /// Mode number, 1 = lowest critical load.
+    pub mode: usize,
+    /// Largest translation of the mode's contribution.
+    pub amplitude: f64,
 }
 
 /// A material model and its constants.
@@ -205,6 +228,9 @@ pub struct StepSpec {
     /// they had at the end of the previous step.
     #[serde(default)]
     pub scale: BTreeMap<String, f64>,
+    /// How the step is solved (default load-controlled `Static`).
+    #[serde(default)]
+    pub kind: crate::solver::StepKind,
 }
 
 /// A monitored point: the node nearest to `point`, with the displacement components kept.

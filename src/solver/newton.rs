@@ -12,7 +12,7 @@ use std::time::Instant;
 use serde::Serialize;
 
 use super::linear::{FactorKind, SparseCholesky};
-use super::SolverSettings;
+use super::{StepKind, SolverSettings};
 use crate::assembly::{Assembler, AssemblyFailure};
 use crate::element::NODE_DOFS;
 use crate::model::{Model, State, FIXED};
@@ -28,6 +28,8 @@ pub struct StepPlan {
     pub linear: bool,
     /// Target scale per load pattern at the end of the step (same order as `Model::loads`).
     pub target_scales: Vec<f64>,
+    /// How the step is solved.
+    pub kind: StepKind,
 }
 
 /// Wall time split (s).
@@ -44,7 +46,7 @@ pub struct Timings {
 }
 
 /// A converged nominal increment.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Default, Serialize)]
 pub struct IncrementReport {
     /// Step index.
     pub step: usize,
@@ -66,6 +68,24 @@ pub struct IncrementReport {
     pub indefinite_tangent: bool,
     /// Strain energy.
     pub energy: f64,
+    /// Load factor λ of a path-following step (scales = start + λ (target − start)).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub load_factor: Option<f64>,
+    /// Negative pivots of the tangent at the converged state (its number of negative
+    /// eigenvalues by Sylvester's law; 0 when LLᵀ succeeds).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub negative_pivots: Option<usize>,
+    /// Current stiffness parameter S_p = (f·K⁻¹f)₁ / (f·K⁻¹f) for the step's load change f,
+    /// 1 at the step's first increment (Bergan et al. 1978); its sign changes at a limit point.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stiffness_parameter: Option<f64>,
+    /// "limit point" or "bifurcation" when this increment crossed one (change of the
+    /// negative-pivot count, or sign change of the stiffness parameter).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stability_event: Option<String>,
+    /// Linearized buckling results of a `Buckling` step.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub buckling: Option<super::BucklingReport>,
 }
 
 /// Progress notification for a bar.
@@ -127,13 +147,13 @@ enum Attempt {
 
 /// A static solver bound to one model.
 pub struct Solver<'m> {
-    model: &'m Model,
-    settings: SolverSettings,
-    assembler: Assembler,
-    cholesky: SparseCholesky,
-    values: Vec<f64>,
-    f_int: Vec<f64>,
-    f_ext: Vec<f64>,
+    pub(super) model: &'m Model,
+    pub(super) settings: SolverSettings,
+    pub(super) assembler: Assembler,
+    pub(super) cholesky: SparseCholesky,
+    pub(super) values: Vec<f64>,
+    pub(super) f_int: Vec<f64>,
+    pub(super) f_ext: Vec<f64>,
     /// Accumulated wall-time split.
     pub timings: Timings,
 }
@@ -170,7 +190,7 @@ impl<'m> Solver<'m> {
     }
 
     /// Free-DOF residual r = f_int − f_ext; returns (‖r‖ / reference, reference).
-    fn residual(&self, r: &mut [f64]) -> (f64, f64) {
+    pub(super) fn residual(&self, r: &mut [f64]) -> (f64, f64) {
         let eq = &self.model.dofs.eq;
         let mut rr = 0.0;
         let mut fe = 0.0;
@@ -187,7 +207,7 @@ impl<'m> Solver<'m> {
         (rr.sqrt() / reference, reference)
     }
 
-    fn assemble(&mut self, state: &State, scales: &[f64], tangent: bool) -> Result<f64, AssemblyFailure> {
+    pub(super) fn assemble(&mut self, state: &State, scales: &[f64], tangent: bool) -> Result<f64, AssemblyFailure> {
         let info = self.assembler.assemble(
             self.model,
             state,
@@ -200,7 +220,7 @@ impl<'m> Solver<'m> {
     }
 
     /// Element touching the node with the largest free residual.
-    fn worst_element(&self, r: &[f64]) -> Option<usize> {
+    pub(super) fn worst_element(&self, r: &[f64]) -> Option<usize> {
         let eq = &self.model.dofs.eq;
         let mut best = (0.0, None);
         for (g, &e) in eq.iter().enumerate() {
@@ -343,9 +363,29 @@ impl<'m> Solver<'m> {
         let mut scales = vec![0.0; nl];
         let total: usize = steps.iter().map(|s| s.increments.max(1)).sum();
         let mut done_before = 0usize;
+        let mut tracker = super::arclength::StabilityTracker::default();
         for (si, step) in steps.iter().enumerate() {
             let start = scales.clone();
             let n_inc = step.increments.max(1);
+            tracker.new_step();
+            match &step.kind {
+                StepKind::Static => {}
+                StepKind::ArcLength { .. } | StepKind::DisplacementControl { .. } => {
+                    let frac0 = done_before as f64 / total as f64;
+                    let frac1 = (done_before + n_inc) as f64 / total as f64;
+                    scales = self.run_path(si, step, &start, state, &mut tracker, on_increment, &mut |p: &Progress| {
+                        progress(&Progress { fraction: frac0 + p.fraction * (frac1 - frac0), ..p.clone() })
+                    })?;
+                    done_before += n_inc;
+                    continue;
+                }
+                StepKind::Buckling { modes, shift } => {
+                    let report = self.run_buckling(si, step, &start, state, *modes, *shift)?;
+                    on_increment(&report, state, self);
+                    done_before += n_inc;
+                    continue;
+                }
+            }
             let at = |tau: f64| -> Vec<f64> { start.iter().zip(&step.target_scales).map(|(a, b)| a + tau * (b - a)).collect() };
             let mut tau = 0.0;
             let mut dtau = 1.0 / n_inc as f64;
@@ -373,6 +413,11 @@ impl<'m> Solver<'m> {
                             }
                             if (tau - goal).abs() < 1e-12 {
                                 tau = goal;
+                                let (negative_pivots, stiffness_parameter, stability_event) = if step.linear {
+                                    (None, None, None)
+                                } else {
+                                    self.stability_at(state, &start, &step.target_scales, &mut tracker)
+                                };
                                 let report = IncrementReport {
                                     step: si,
                                     step_name: step.name.clone(),
@@ -384,6 +429,10 @@ impl<'m> Solver<'m> {
                                     cutbacks,
                                     indefinite_tangent: indefinite,
                                     energy,
+                                    negative_pivots,
+                                    stiffness_parameter,
+                                    stability_event,
+                                    ..Default::default()
                                 };
                                 on_increment(&report, state, self);
                                 break;
