@@ -27,6 +27,10 @@ pub mod scenes {
     pub const TWISTED_BEAM: &str = include_str!("../garments/benchmarks/twisted_beam.ron");
     /// Clamped plate, thin limit.
     pub const CLAMPED_PLATE: &str = include_str!("../garments/benchmarks/clamped_plate.ron");
+    /// Simply supported square plate in uniaxial compression, linearized buckling.
+    pub const PLATE_BUCKLING: &str = include_str!("../garments/benchmarks/plate_buckling.ron");
+    /// Axially compressed cylinder (quarter), linearized buckling.
+    pub const CYLINDER_BUCKLING: &str = include_str!("../garments/benchmarks/cylinder_buckling.ron");
     /// Sze et al. (2004) §3.8a hinged cylindrical roof, arc length.
     pub const HINGED_ROOF: &str = include_str!("../garments/benchmarks/hinged_roof.ron");
 }
@@ -353,6 +357,36 @@ pub fn hinged_roof(n: usize, displacement_control: bool) -> Result<PathCompariso
     Ok(PathComparison { summary, path, reference: reference.clone(), curve_error: e1.max(e2), limit_load, reference_limit: reference[ir].1, wall_s: t.elapsed().as_secs_f64() })
 }
 
+/// Lowest eigenvalue of a bundled `Buckling` scene with substitutions, and the run.
+fn lowest_buckling_eigenvalue(template: &str, name: &str, rep: &[(&str, String)]) -> Result<(f64, Summary, f64), String> {
+    let t = Instant::now();
+    let s = solve_variant(template, name, rep)?;
+    let lam = s
+        .increments
+        .iter()
+        .find_map(|i| i.buckling.as_ref())
+        .and_then(|b| b.eigenvalues.first().copied())
+        .ok_or("no buckling eigenvalue")?;
+    Ok((lam, s, t.elapsed().as_secs_f64()))
+}
+
+/// Simply supported square plate (a = b = 1, t = 0.01, E = 1e7, ν = 0.3) under unit edge
+/// compression on an n×n mesh: the buckling coefficient k = N_cr b² / (π² D), classical 4.
+pub fn plate_buckling(n: usize) -> Result<(f64, Summary, f64), String> {
+    let (lam, s, w) = lowest_buckling_eigenvalue(scenes::PLATE_BUCKLING, "plate_buckling", &[("nx: 16, ny: 16", format!("nx: {n}, ny: {n}"))])?;
+    let d = 1.0e7 * 0.01f64.powi(3) / (12.0 * (1.0 - 0.09));
+    Ok((lam / (std::f64::consts::PI.powi(2) * d), s, w))
+}
+
+/// Axially compressed cylinder (R = 1, t = 0.01, L = 1, E = 1e7, ν = 0) on a quarter mesh
+/// n_axial × n_circ: the lowest critical stress over the classical E t / (R √3).
+pub fn cylinder_buckling(n_axial: usize, n_circ: usize) -> Result<(f64, Summary, f64), String> {
+    let rep = [("n_axial: 40, n_circ: 60", format!("n_axial: {n_axial}, n_circ: {n_circ}"))];
+    let (lam, s, w) = lowest_buckling_eigenvalue(scenes::CYLINDER_BUCKLING, "cylinder_buckling", &rep)?;
+    let classical = 1.0e7 * 0.01 * 0.01 / 3f64.sqrt();
+    Ok((lam / classical, s, w))
+}
+
 fn record(benchmark: &str, mesh: String, s: &Summary, wall_s: f64, value: f64, reference: f64, rel_error: f64) -> Record {
     Record { benchmark: benchmark.into(), mesh, dofs: s.sizes.dofs, newton_iterations: s.newton_iterations, wall_s, value, reference, rel_error }
 }
@@ -416,6 +450,16 @@ pub fn run_all(json: &Path, quick: bool) -> Result<(), String> {
             recs.push(record(name, format!("{n}x{n}"), &s, w, v, reference, (v - reference).abs() / reference));
             print(recs.last().ok_or("empty")?);
         }
+    }
+    for n in pick(vec![8, 16, 24, 32], quick) {
+        let (k, s, w) = plate_buckling(n)?;
+        recs.push(record("plate_buckling_k", format!("{n}x{n}"), &s, w, k, 4.0, (k - 4.0).abs() / 4.0));
+        print(recs.last().ok_or("empty")?);
+    }
+    for (na, nc) in pick(vec![(20, 30), (40, 60), (60, 90)], quick) {
+        let (r, s, w) = cylinder_buckling(na, nc)?;
+        recs.push(record("cylinder_buckling_ratio", format!("{na}x{nc}q"), &s, w, r, 1.0, (r - 1.0).abs()));
+        print(recs.last().ok_or("empty")?);
     }
     for dc in [false, true] {
         for n in pick(vec![8, 16], quick) {

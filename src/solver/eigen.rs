@@ -12,12 +12,15 @@
 //! the critical load is start + λ f. The central difference error is O(ε²) with ε chosen so
 //! that ε v moves the structure by 1e-6 of its size.
 //!
-//! Eigen solver: subspace iteration (Bathe 2014 §11.6) with shift-invert. With
-//! B = −K_Δ and shift σ, A = K_T − σB is factorized once (sparse LLᵀ; it must be positive
-//! definite, i.e. σ below the lowest eigenvalue and the base state stable); each sweep
-//! computes Y = A⁻¹ B X and solves the projected pencil (YᵀBY) z = μ (YᵀAY) z, whose
-//! largest μ give the eigenvalues λ = σ + 1/μ nearest above σ. Iterates until the wanted λ
-//! change by less than 1e-10 relatively.
+//! Eigen solver: shift-invert Lanczos with full reorthogonalization (Ericsson & Ruhe 1980;
+//! Grimes, Lewis & Simon 1994). With B = −K_Δ and shift σ, A = K_T − σB is factorized
+//! once (sparse LLᵀ; it must be positive definite, i.e. σ below the lowest eigenvalue and the
+//! base state stable). T = A⁻¹B is self-adjoint in the A-inner product, so Lanczos in that
+//! inner product gives a tridiagonal matrix whose largest eigenvalues θ are the largest
+//! μ = 1/(λ − σ), i.e. the eigenvalues λ = σ + 1/θ nearest above σ. Each Lanczos vector is
+//! orthogonalized twice against all previous ones; iteration stops when the residual
+//! estimate β_m |s_m,i| of every wanted Ritz pair is below 1e-9 θ_i (eigenvalue error of
+//! order its square). A single start vector sees one copy of a multiple eigenvalue.
 
 use nalgebra::{DMatrix, SymmetricEigen};
 use serde::Serialize;
@@ -36,7 +39,7 @@ pub struct BucklingReport {
     pub critical_scales: Vec<Vec<f64>>,
     /// Relative residual ‖K_T φ + λ K_Δ φ‖ / ‖K_T φ‖ of each pair.
     pub residuals: Vec<f64>,
-    /// Subspace iterations used.
+    /// Lanczos steps used.
     pub iterations: usize,
     /// Mode shapes over all DOFs (5 per node: translations, then tilts in the node's current
     /// frame), scaled to a largest translation of 1.
@@ -60,6 +63,100 @@ fn start_vector(n: usize, seed: u64) -> Vec<f64> {
 }
 
 impl<'m> Solver<'m> {
+    /// Shift-invert Lanczos on T = A⁻¹B (A factorized in `self.cholesky`, both stored as
+    /// upper triangles): the `nev` largest positive θ as λ = σ + 1/θ with Ritz vectors, and
+    /// the number of Lanczos steps.
+    fn lanczos(&mut self, a: &[f64], b: &[f64], start: &[f64], nev: usize, sigma: f64) -> Result<(Vec<f64>, Vec<Vec<f64>>, usize), String> {
+        let n = start.len();
+        let max_steps = n.min(200 + 40 * nev).min(2000);
+        let mut tmp = vec![0.0; n];
+        // Start: A⁻¹B of the prebuckling direction plus a pseudo-random perturbation, so no
+        // mode is missed by symmetry.
+        let r = start_vector(n, 7);
+        let smax = start.iter().fold(0.0f64, |m, v| m.max(v.abs())).max(1e-300);
+        let mut q: Vec<f64> = start.iter().zip(&r).map(|(s, r)| s / smax + 1e-3 * r).collect();
+        self.cholesky.multiply(b, &q, &mut tmp);
+        q.copy_from_slice(&tmp);
+        self.cholesky.solve(&mut q);
+        self.cholesky.multiply(a, &q, &mut tmp);
+        let nrm = dot(&q, &tmp).sqrt();
+        if !(nrm > 0.0) || !nrm.is_finite() {
+            return Err("the start vector has no component the geometric stiffness acts on".into());
+        }
+        q.iter_mut().for_each(|v| *v /= nrm);
+        let mut basis: Vec<Vec<f64>> = vec![q];
+        let mut alpha: Vec<f64> = Vec::new();
+        let mut beta: Vec<f64> = Vec::new();
+        let mut w = vec![0.0; n];
+        let mut found: Option<(Vec<f64>, DMatrix<f64>)> = None;
+        for j in 0..max_steps {
+            self.cholesky.multiply(b, &basis[j], &mut w);
+            self.cholesky.solve(&mut w);
+            let mut aj = 0.0;
+            for _pass in 0..2 {
+                self.cholesky.multiply(a, &w, &mut tmp);
+                for (i, qi) in basis.iter().enumerate() {
+                    let c = dot(qi, &tmp);
+                    if i == j {
+                        aj += c;
+                    }
+                    w.iter_mut().zip(qi).for_each(|(x, y)| *x -= c * y);
+                }
+            }
+            alpha.push(aj);
+            self.cholesky.multiply(a, &w, &mut tmp);
+            let bj = dot(&w, &tmp).max(0.0).sqrt();
+            let m = j + 1;
+            let exhausted = bj <= 1e-14 * aj.abs().max(1e-300);
+            let last = exhausted || m == max_steps;
+            if m >= nev && (m % 5 == 0 || last) {
+                let mut t = DMatrix::zeros(m, m);
+                for i in 0..m {
+                    t[(i, i)] = alpha[i];
+                    if i + 1 < m {
+                        t[(i, i + 1)] = beta[i];
+                        t[(i + 1, i)] = beta[i];
+                    }
+                }
+                let eig = SymmetricEigen::new(t);
+                let mut order: Vec<usize> = (0..m).collect();
+                order.sort_by(|&x, &y| eig.eigenvalues[y].total_cmp(&eig.eigenvalues[x]));
+                let wanted: Vec<usize> = order.iter().copied().take(nev).collect();
+                let ok = wanted.iter().all(|&i| {
+                    let th = eig.eigenvalues[i];
+                    th > 0.0 && (bj * eig.eigenvectors[(m - 1, i)]).abs() <= 1e-9 * th
+                });
+                if ok || last {
+                    let th: Vec<f64> = wanted.iter().map(|&i| eig.eigenvalues[i]).collect();
+                    let s = DMatrix::from_fn(m, wanted.len(), |r, c| eig.eigenvectors[(r, wanted[c])]);
+                    found = Some((th, s));
+                    break;
+                }
+            }
+            if exhausted {
+                break;
+            }
+            beta.push(bj);
+            basis.push(w.iter().map(|v| v / bj).collect());
+        }
+        let (theta, s) = found.ok_or("Lanczos found no eigenvalue")?;
+        if theta.len() < nev || theta.iter().any(|t| !(*t > 0.0)) {
+            return Err("fewer positive eigenvalues than modes asked for: the load change causes no buckling".into());
+        }
+        let steps = alpha.len();
+        let vectors = (0..theta.len())
+            .map(|c| {
+                let mut x = vec![0.0; n];
+                for (r, qr) in basis.iter().enumerate().take(s.nrows()) {
+                    let wgt = s[(r, c)];
+                    x.iter_mut().zip(qr).for_each(|(a, b)| *a += wgt * b);
+                }
+                x
+            })
+            .collect();
+        Ok((theta.iter().map(|t| sigma + 1.0 / t).collect(), vectors, steps))
+    }
+
     /// Lowest `nev` buckling eigenpairs at `state` for the load change from `start` to
     /// `target` scales, nearest above the shift `sigma`.
     pub fn buckling(&mut self, state: &State, start: &[f64], target: &[f64], nev: usize, sigma: f64) -> Result<BucklingReport, String> {
@@ -115,76 +212,8 @@ impl<'m> Solver<'m> {
             Ok(FactorKind::Llt) => {}
             _ => return Err(format!("K_T − σ(−K_Δ) is not positive definite for σ = {sigma}: choose a shift below the lowest critical load")),
         }
-        // Subspace iteration.
-        let p = (2 * nev).max(nev + 8).min(n);
-        let mut x: Vec<Vec<f64>> = (0..p).map(|j| start_vector(n, j as u64 + 1)).collect();
-        x[0] = v.clone();
-        let mut lam_old = vec![f64::INFINITY; nev.min(p)];
+        let (eigenvalues, vectors, iterations) = self.lanczos(&a, &b, &v, nev, sigma)?;
         let mut bx = vec![0.0; n];
-        let mut tmp = vec![0.0; n];
-        let mut iterations = 0;
-        let max_sweeps = 500;
-        let mut result: Option<(Vec<f64>, Vec<Vec<f64>>)> = None;
-        for sweep in 1..=max_sweeps {
-            iterations = sweep;
-            // Y = A⁻¹ B X.
-            let mut y = Vec::with_capacity(p);
-            for xj in &x {
-                self.cholesky.multiply(&b, xj, &mut bx);
-                let mut yj = bx.clone();
-                self.cholesky.solve(&mut yj);
-                y.push(yj);
-            }
-            // Projected pencil.
-            let mut ar = DMatrix::zeros(p, p);
-            let mut br = DMatrix::zeros(p, p);
-            let mut ay = Vec::with_capacity(p);
-            let mut by = Vec::with_capacity(p);
-            for yj in &y {
-                self.cholesky.multiply(&a, yj, &mut tmp);
-                ay.push(tmp.clone());
-                self.cholesky.multiply(&b, yj, &mut tmp);
-                by.push(tmp.clone());
-            }
-            for i in 0..p {
-                for j in 0..p {
-                    ar[(i, j)] = 0.5 * (dot(&y[i], &ay[j]) + dot(&y[j], &ay[i]));
-                    br[(i, j)] = 0.5 * (dot(&y[i], &by[j]) + dot(&y[j], &by[i]));
-                }
-            }
-            let chol = ar.clone().cholesky().ok_or("projected stiffness is not positive definite (dependent subspace vectors)")?;
-            let l = chol.l();
-            let linv = l.clone().try_inverse().ok_or("projected stiffness factor is singular")?;
-            let c = &linv * &br * linv.transpose();
-            let c = 0.5 * (&c + c.transpose());
-            let eig = SymmetricEigen::new(c);
-            let mut order: Vec<usize> = (0..p).collect();
-            order.sort_by(|&i, &j| eig.eigenvalues[j].total_cmp(&eig.eigenvalues[i]));
-            let z = linv.transpose() * &eig.eigenvectors;
-            // New basis X = Y Z (columns ordered by decreasing μ).
-            let mut xn = vec![vec![0.0; n]; p];
-            for (k, &col) in order.iter().enumerate() {
-                for (j, yj) in y.iter().enumerate() {
-                    let w = z[(j, col)];
-                    if w != 0.0 {
-                        xn[k].iter_mut().zip(yj).for_each(|(a, b)| *a += w * b);
-                    }
-                }
-            }
-            x = xn;
-            let mu: Vec<f64> = order.iter().map(|&i| eig.eigenvalues[i]).collect();
-            if mu.iter().take(nev.min(p)).any(|m| *m <= 0.0) && sweep == max_sweeps {
-                return Err("fewer positive eigenvalues than modes asked for: the load change causes no buckling".into());
-            }
-            let lam: Vec<f64> = mu.iter().take(nev.min(p)).map(|m| if *m > 0.0 { sigma + 1.0 / m } else { f64::INFINITY }).collect();
-            let converged = lam.iter().zip(&lam_old).all(|(a, b)| a.is_finite() && ((a - b) / a).abs() < 1e-10);
-            lam_old = lam.clone();
-            if converged || sweep == max_sweeps {
-                result = Some((lam, x.iter().take(nev.min(p)).cloned().collect()));
-                break;
-            }
-        }
-        let (eigenvalues, vectors) = result.ok_or("subspace iteration did not run")?;
         if eigenvalues.iter().any(|l| !l.is_finite()) {
             return Err("fewer positive eigenvalues than modes asked for: the load change causes no buckling".into());
         }
