@@ -142,6 +142,20 @@ impl<'m> Solver<'m> {
         fkf.is_finite().then_some((pivots, fkf, v))
     }
 
+    /// Likely cause of a failed increment from the last factorized tangent: its inertia and
+    /// pivot range.
+    fn tangent_diagnosis(&self) -> String {
+        let neg = self.cholesky.negative_pivots();
+        let ratio = self.cholesky.pivot_ratio();
+        if ratio < 1e-13 {
+            format!("likely cause: nearly singular tangent (smallest/largest pivot {ratio:.1e}, {neg} negative): a mechanism, missing support, or a critical point hit exactly")
+        } else if neg > 0 {
+            format!("likely cause: indefinite tangent ({neg} negative pivots) and a too long step; smallest/largest pivot {ratio:.1e}")
+        } else {
+            format!("likely cause: strong nonlinearity for this step length (tangent positive definite, smallest/largest pivot {ratio:.1e})")
+        }
+    }
+
     /// Inertia and current stiffness parameter of a converged state whose tangent is in
     /// `values` (the last assembly), for the load change of a step from `start` to
     /// `target`; returns (negative pivots, S_p, event).
@@ -421,7 +435,8 @@ impl<'m> Solver<'m> {
                 }
                 if it >= 3 && rel > 1e6 * residuals[0].max(1e-12) {
                     let el = self.worst_element(&r);
-                    return fail(it, &residuals, el, "corrector diverging (residual grew a millionfold)".into());
+                    let why = self.tangent_diagnosis();
+                    return fail(it, &residuals, el, format!("corrector diverging (residual grew a millionfold); {why}"));
                 }
             }
             let f = self.load_change(state, start, target);
@@ -488,6 +503,7 @@ impl<'m> Solver<'m> {
         let (rel, _) = self.residual(&mut r);
         residuals.push(rel);
         let el = self.worst_element(&r);
-        fail(self.settings.max_iterations, &residuals, el, format!("no convergence in {} iterations", self.settings.max_iterations))
+        let why = self.tangent_diagnosis();
+        fail(self.settings.max_iterations, &residuals, el, format!("no convergence in {} iterations; {why}", self.settings.max_iterations))
     }
 }

@@ -139,34 +139,48 @@ impl SparseCholesky {
         if self.kind == FactorKind::Llt {
             return 0;
         }
-        let mut count = 0;
+        self.pivots().iter().filter(|d| **d < 0.0).count()
+    }
+
+    /// The pivots of the last factorization: D of L D Lᵀ, or the squared diagonal of L
+    /// after LLᵀ (in elimination order).
+    pub fn pivots(&self) -> Vec<f64> {
+        let square = self.kind == FactorKind::Llt;
+        let mut out = Vec::with_capacity(self.symbolic.nrows());
         match self.symbolic.raw() {
             SymbolicCholeskyRaw::Simplicial(sym) => {
-                // Each column of the simplicial factor stores its diagonal (D) first.
+                // Each column of the simplicial factor stores its diagonal first.
                 let cp = sym.col_ptr();
                 let l = simplicial::SimplicialLdltRef::<'_, usize, f64>::new(sym, &self.l_values);
                 let v = l.values();
                 for j in 0..sym.ncols() {
-                    if v[cp[j]] < 0.0 {
-                        count += 1;
-                    }
+                    out.push(v[cp[j]]);
                 }
             }
             SymbolicCholeskyRaw::Supernodal(sym) => {
-                // The top block of each supernode holds L's unit diagonal block with D on
-                // its diagonal.
+                // The top block of each supernode holds the diagonal block of the factor.
                 let l = supernodal::SupernodalLdltRef::<'_, usize, f64>::new(sym, &self.l_values);
                 for s in 0..sym.n_supernodes() {
                     let m = l.supernode(s).val();
                     for j in 0..m.ncols() {
-                        if m[(j, j)] < 0.0 {
-                            count += 1;
-                        }
+                        out.push(m[(j, j)]);
                     }
                 }
             }
         }
-        count
+        if square {
+            out.iter_mut().for_each(|d| *d *= *d);
+        }
+        out
+    }
+
+    /// Smallest over largest pivot magnitude of the last factorization: a cheap
+    /// conditioning indicator (round-off level means a mechanism or a critical point).
+    pub fn pivot_ratio(&self) -> f64 {
+        let p = self.pivots();
+        let lo = p.iter().fold(f64::INFINITY, |m, d| m.min(d.abs()));
+        let hi = p.iter().fold(0.0f64, |m, d| m.max(d.abs()));
+        if hi > 0.0 { lo / hi } else { 0.0 }
     }
 
     /// y = A x for the symmetric matrix stored as its upper triangle with `values`.
