@@ -135,7 +135,15 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
         }
         x0.extend_from_slice(&m.nodes);
         d0.extend_from_slice(&m.directors);
-        parts.push(PartInfo { name: p.name.clone(), first_node, n_nodes: m.nodes.len(), first_element, n_elements: m.quads.len() });
+        let gravity_density = scene.loads.values().find_map(|l| match l {
+            LoadSpec::Gravity { part, areal_density, .. } if *part == p.name => Some(*areal_density),
+            _ => None,
+        });
+        if !(p.areal_density.is_finite() && p.areal_density >= 0.0) {
+            return Err(loc.at(Some(&p.name), Some("areal_density"), format!("{field}.areal_density"), "expected a non-negative mass per area"));
+        }
+        let areal_density = if p.areal_density > 0.0 { p.areal_density } else { gravity_density.unwrap_or(0.0) };
+        parts.push(PartInfo { name: p.name.clone(), first_node, n_nodes: m.nodes.len(), first_element, n_elements: m.quads.len(), areal_density });
         meshes.push(m);
     }
     let n_nodes = x0.len();

@@ -26,7 +26,7 @@ pub(super) fn resolve_step_kind(
 ) -> Result<StepKind, SceneError> {
     let bad = |key: &str, msg: String| loc.at(Some(&s.name), Some(key), format!("{field}.kind.{key}"), msg);
     let mut kind = s.kind.clone();
-    let path_following = !matches!(kind, StepKind::Static);
+    let path_following = matches!(kind, StepKind::ArcLength { .. } | StepKind::DisplacementControl { .. } | StepKind::Buckling { .. });
     if path_following {
         for lname in s.scale.keys() {
             if let Some(l) = loads.iter().find(|l| &l.name == lname) {
@@ -45,7 +45,7 @@ pub(super) fn resolve_step_kind(
         }
     }
     match &mut kind {
-        StepKind::Static => {}
+        StepKind::Static | StepKind::StaticDamped | StepKind::Dynamic(_) => {}
         StepKind::ArcLength { length, min_length, max_length, desired_iterations, max_load_factor, max_displacement } => {
             if !positive(*length) {
                 return Err(bad("length", format!("expected a positive arc length, found {length}")));

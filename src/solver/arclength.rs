@@ -260,7 +260,7 @@ impl<'m> Solver<'m> {
                         negative_pivots,
                         stiffness_parameter,
                         stability_event,
-                        buckling: None,
+                        ..Default::default()
                     };
                     on_increment(&report, state, self);
                     cutbacks = 0;
@@ -321,7 +321,7 @@ impl<'m> Solver<'m> {
                                         negative_pivots,
                                         stiffness_parameter,
                                         stability_event,
-                                        buckling: None,
+                                        ..Default::default()
                                     };
                                     on_increment(&report, state, self);
                                     break;

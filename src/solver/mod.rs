@@ -1,10 +1,14 @@
 //! Nonlinear solution: load stepping with Newton–Raphson, line search and cut-back.
 
 pub mod arclength;
+pub mod damped;
+pub mod diagnose;
+pub mod dynamics;
 pub mod eigen;
 pub mod linear;
 pub mod newton;
 
+pub use dynamics::{DynamicInfo, DynamicSettings, LumpedMass};
 pub use eigen::BucklingReport;
 pub use newton::{IncrementReport, Progress, SolveError, Solver, StepPlan, Timings};
 
@@ -36,13 +40,20 @@ impl Default for SolverSettings {
     }
 }
 
-/// How a step drives the solution (chosen per step in the scene; default `Static`).
+/// How a step is solved.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
 pub enum StepKind {
-    /// Load control: the scales are ramped over the increments, Newton–Raphson in each.
+    /// Load-controlled Newton–Raphson with cut-back (`newton.rs`).
     #[default]
     Static,
+    /// Static Newton with a Levenberg–Marquardt shift K + μ·k̄·I when the tangent is not
+    /// positive definite, μ adapted by a trust-region test on the potential energy and the
+    /// residual (`damped.rs`).
+    StaticDamped,
+    /// Pseudo-transient continuation: implicit (backward-Euler) dynamics with lumped mass
+    /// from the parts' areal density, integrated until the kinetic energy and the static
+    /// residual vanish (`dynamics.rs`).
+    Dynamic(DynamicSettings),
     /// Arc-length path following (Crisfield 1981, cylindrical constraint on the free
     /// translations): the load factor λ, with scales = start + λ (target − start), is an
     /// unknown. `increments` of the step is the maximum number of arc-length increments.

@@ -14,6 +14,7 @@ use serde::Serialize;
 use super::linear::{FactorKind, SparseCholesky};
 use super::{StepKind, SolverSettings};
 use crate::assembly::{Assembler, AssemblyFailure};
+use super::dynamics::DynamicInfo;
 use crate::element::NODE_DOFS;
 use crate::model::{Model, State, FIXED};
 
@@ -28,7 +29,7 @@ pub struct StepPlan {
     pub linear: bool,
     /// Target scale per load pattern at the end of the step (same order as `Model::loads`).
     pub target_scales: Vec<f64>,
-    /// How the step is solved.
+    /// How the step is solved (static Newton by default).
     pub kind: StepKind,
 }
 
@@ -86,6 +87,9 @@ pub struct IncrementReport {
     /// Linearized buckling results of a `Buckling` step.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub buckling: Option<super::BucklingReport>,
+    /// Time-integration data of a `Dynamic` step (None for static steps).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub dynamics: Option<DynamicInfo>,
 }
 
 /// Progress notification for a bar.
@@ -140,7 +144,7 @@ impl std::fmt::Display for SolveError {
 }
 
 /// Outcome of one attempted increment.
-enum Attempt {
+pub(super) enum Attempt {
     Converged { iterations: usize, residuals: Vec<f64>, indefinite: bool, energy: f64 },
     Failed { iteration: usize, residuals: Vec<f64>, worst_element: Option<usize>, cause: String },
 }
@@ -369,7 +373,14 @@ impl<'m> Solver<'m> {
             let n_inc = step.increments.max(1);
             tracker.new_step();
             match &step.kind {
-                StepKind::Static => {}
+                StepKind::Static | StepKind::StaticDamped => {}
+                StepKind::Dynamic(ds) => {
+                    let frac = (done_before as f64 / total as f64, n_inc as f64 / total as f64);
+                    self.run_dynamic_step(si, step, ds, &start, state, on_increment, progress, frac.0, frac.1)?;
+                    scales = step.target_scales.clone();
+                    done_before += n_inc;
+                    continue;
+                }
                 StepKind::ArcLength { .. } | StepKind::DisplacementControl { .. } => {
                     let frac0 = done_before as f64 / total as f64;
                     let frac1 = (done_before + n_inc) as f64 / total as f64;
@@ -401,7 +412,11 @@ impl<'m> Solver<'m> {
                     let saved = state.clone();
                     let frac = (done_before as f64 + next * n_inc as f64) / total as f64;
                     let mut report_progress = |it: usize, res: f64| progress(&Progress { step: si, fraction: frac, iteration: it, residual: res });
-                    match self.attempt(state, &trial_scales, step.linear, &mut report_progress) {
+                    let outcome = match step.kind {
+                        StepKind::StaticDamped => self.attempt_damped(state, &trial_scales, &mut report_progress),
+                        _ => self.attempt(state, &trial_scales, step.linear, &mut report_progress),
+                    };
+                    match outcome {
                         Attempt::Converged { iterations: its, residuals, indefinite: ind, energy } => {
                             iterations += its;
                             indefinite |= ind;
@@ -432,6 +447,7 @@ impl<'m> Solver<'m> {
                                     negative_pivots,
                                     stiffness_parameter,
                                     stability_event,
+                                    dynamics: None,
                                     ..Default::default()
                                 };
                                 on_increment(&report, state, self);
@@ -439,6 +455,11 @@ impl<'m> Solver<'m> {
                             }
                         }
                         Attempt::Failed { iteration, residuals, worst_element, cause } => {
+                            let cause = if cutback_level >= self.settings.max_cutbacks {
+                                super::diagnose::explain(self.model, state, &cause, indefinite || self.cholesky.kind() == FactorKind::Ldlt)
+                            } else {
+                                cause
+                            };
                             *state = saved;
                             iterations += iteration;
                             if cutback_level >= self.settings.max_cutbacks {
