@@ -44,7 +44,7 @@ pub struct RunOptions {
 pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &mut dyn FnMut(&Progress)) -> Result<Summary, RunError> {
     let t0 = Instant::now();
     let seeded = match &built.imperfection {
-        Some(imp) => Some(crate::solver::eigen::seeded_model(&built.model, imp, &scene.solver).map_err(RunError::Setup)?),
+        Some(imp) => Some(crate::solver::imperfection::seeded(&built.model, imp, &scene.solver).map_err(RunError::Setup)?),
         None => None,
     };
     let model = seeded.as_ref().map_or(&built.model, |s| &s.0);
@@ -55,7 +55,7 @@ pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &m
         sizes: Sizes { nodes: model.n_nodes(), elements: model.elements.len(), dofs, tangent_nnz, factor_nnz },
         loads: model.loads.iter().map(|l| l.name.clone()).collect(),
         monitors: built.monitors.iter().map(|m| MonitorHistory::new(m, model)).collect(),
-        imperfection_buckling: seeded.as_ref().map(|s| s.1.clone()),
+        imperfection_buckling: seeded.as_ref().and_then(|s| s.1.clone()),
         ..Default::default()
     };
     if let Some(dir) = &options.out_dir {

@@ -40,7 +40,7 @@ pub struct BuiltScene {
     /// Mesh quality per part.
     pub quality: Vec<(String, MeshQuality)>,
     /// Buckling-mode imperfection to seed before the solve.
-    pub imperfection: Option<crate::solver::eigen::ModeImperfection>,
+    pub imperfection: Option<crate::solver::imperfection::Imperfection>,
 }
 
 fn v3(a: [f64; 3]) -> Vector3<f64> {

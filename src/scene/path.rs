@@ -8,6 +8,7 @@ use super::spec::{Dof, ImperfectionSpec, StepSpec};
 use crate::element::NODE_DOFS;
 use crate::model::{Load, LoadKind};
 use crate::solver::eigen::ModeImperfection;
+use crate::solver::imperfection::{Imperfection, RandomField};
 use crate::solver::StepKind;
 
 fn positive(x: f64) -> bool {
@@ -111,8 +112,19 @@ pub(super) fn resolve_step_kind(
 }
 
 /// Checks a buckling-mode imperfection and resolves its load names to scales.
-pub(super) fn resolve_imperfection(imp: &ImperfectionSpec, loc: &Locator, loads: &[Load]) -> Result<ModeImperfection, SceneError> {
-    let ImperfectionSpec::BucklingModes { scale, modes } = imp;
+pub(super) fn resolve_imperfection(imp: &ImperfectionSpec, loc: &Locator, loads: &[Load]) -> Result<Imperfection, SceneError> {
+    let (scale, modes) = match imp {
+        ImperfectionSpec::BucklingModes { scale, modes } => (scale, modes),
+        ImperfectionSpec::RandomField { amplitude, correlation_length, seed } => {
+            if !amplitude.is_finite() {
+                return Err(loc.at(None, Some("amplitude"), "imperfection.amplitude", "expected a finite amplitude"));
+            }
+            if !positive(*correlation_length) {
+                return Err(loc.at(None, Some("correlation_length"), "imperfection.correlation_length", "expected a positive correlation length"));
+            }
+            return Ok(Imperfection::RandomField(RandomField { amplitude: *amplitude, correlation_length: *correlation_length, seed: *seed }));
+        }
+    };
     let mut scales = vec![0.0; loads.len()];
     for (lname, &v) in scale {
         let Some(i) = loads.iter().position(|l| &l.name == lname) else {
@@ -141,5 +153,5 @@ pub(super) fn resolve_imperfection(imp: &ImperfectionSpec, loc: &Locator, loads:
             return Err(loc.at(None, Some("amplitude"), "imperfection.modes.amplitude", "expected a finite amplitude"));
         }
     }
-    Ok(ModeImperfection { scales, modes: modes.iter().map(|m| (m.mode, m.amplitude)).collect() })
+    Ok(Imperfection::BucklingModes(ModeImperfection { scales, modes: modes.iter().map(|m| (m.mode, m.amplitude)).collect() }))
 }

@@ -53,6 +53,10 @@ pub enum ImperfectionSpec {
     /// reference state under the load patterns scaled by `scale`; mode k (from 1) is added
     /// scaled to a largest translation of `amplitude` (a length).
     BucklingModes { scale: BTreeMap<String, f64>, modes: Vec<ModeAmplitude> },
+    /// A seeded Gaussian random field along the reference directors with squared-exponential
+    /// covariance of correlation length `correlation_length`, scaled to a largest
+    /// displacement of `amplitude`; the directors follow the perturbed surface.
+    RandomField { amplitude: f64, correlation_length: f64, #[serde(default)] seed: u64 },
 }
 
 /// One mode of a buckling-mode imperfection.
