@@ -33,3 +33,26 @@ fn axially_compressed_cylinder_buckles_at_the_classical_stress() {
     eprintln!("cylinder 40x60 quarter: sigma/sigma_cl = {ratio:.5}, {} dofs, {w:.2} s", s.sizes.dofs);
     assert!((ratio - 1.0).abs() < 0.05, "ratio {ratio}");
 }
+
+/// Buckling at a given state: after a static step to half the critical load, a `Buckling`
+/// step for a further unit compression finds the remaining margin, λ = λ_cr − 0.5 N_cr (the
+/// flat prebuckling state is a membrane state, so K_T there is K₀ + ½ N_cr K_σ up to the
+/// prebuckling strain): within 0.1 % of the value from the unloaded plate.
+#[test]
+fn buckling_at_a_preloaded_state_gives_the_remaining_margin() {
+    let text = bench::scenes::PLATE_BUCKLING.replace(
+        "steps: [(name: \"buckling\", increments: 1, scale: {\"compression\": 1.0}, kind: Buckling(modes: 4))],",
+        "steps: [(name: \"preload\", increments: 2, scale: {\"compression\": 18.0764}), (name: \"buckling\", increments: 1, scale: {\"compression\": 19.0764}, kind: Buckling(modes: 1))],",
+    );
+    assert_ne!(text, bench::scenes::PLATE_BUCKLING);
+    let s = bench::solve_variant(&text, "plate_preloaded", &[]).expect("solve");
+    let lam = s.increments.iter().find_map(|i| i.buckling.as_ref()).expect("buckling").eigenvalues[0];
+    let (k, _, _) = bench::plate_buckling(16).expect("solve");
+    let d = 1.0e7 * 1e-6 / (12.0 * 0.91);
+    let lam_cr = k * std::f64::consts::PI.powi(2) * d;
+    let expected = lam_cr - 18.0764;
+    eprintln!("preloaded: remaining {lam:.5}, expected {expected:.5}");
+    assert!((lam / expected - 1.0).abs() < 1e-3, "remaining margin {lam} vs {expected}");
+    let critical = &s.increments.last().expect("increments").buckling.as_ref().expect("buckling").critical_scales[0];
+    assert!((critical[0] / lam_cr - 1.0).abs() < 1e-3, "critical scale {} vs {lam_cr}", critical[0]);
+}

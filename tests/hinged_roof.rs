@@ -58,3 +58,20 @@ fn hinged_roof_displacement_control_follows_the_path() {
     let c = bench::hinged_roof(8, true).expect("solve");
     check_path(&c, "displacement control");
 }
+
+/// Cut-back and retry: started with an arc length 40 times too long (20 instead of 0.5,
+/// also the maximum) and only 3 corrector iterations allowed, increments fail, are retried
+/// with halved arc lengths, and the path still matches the reference within the same 2 %
+/// and 1 % tolerances.
+#[test]
+fn hinged_roof_arc_length_recovers_by_cutting_back() {
+    let extra = [
+        ("length: 5e-1, max_length: Some(1e0)", "length: 20.0, max_length: Some(20.0)".to_string()),
+        ("    output: (plot_against: Some(\"point\")),", "    output: (plot_against: Some(\"point\")),\n    solver: (max_iterations: 3),".to_string()),
+    ];
+    let c = bench::hinged_roof_with(8, false, &extra).expect("solve");
+    let cutbacks: usize = c.summary.increments.iter().map(|i| i.cutbacks).sum();
+    assert!(cutbacks >= 10, "only {cutbacks} cut-backs");
+    check_path(&c, "arc length with cut-backs");
+    assert_eq!(c.summary.stability_events.len(), 2);
+}
