@@ -394,6 +394,7 @@ impl<'m> Solver<'m> {
                         indefinite_tangent: false,
                         energy,
                         dynamics: Some(DynamicInfo { time: t, dt, kinetic_energy: ke, static_residual, at_rest, rejected }),
+                        ..Default::default()
                     };
                     on_increment(&report, state, self);
                     if at_rest {
