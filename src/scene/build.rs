@@ -39,6 +39,8 @@ pub struct BuiltScene {
     pub node_sets: BTreeMap<String, Vec<usize>>,
     /// Mesh quality per part.
     pub quality: Vec<(String, MeshQuality)>,
+    /// Buckling-mode imperfection to seed before the solve.
+    pub imperfection: Option<crate::solver::imperfection::Imperfection>,
 }
 
 fn v3(a: [f64; 3]) -> Vector3<f64> {
@@ -358,7 +360,8 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
             current[i] = v;
         }
         let _ = si;
-        steps.push(StepPlan { name: s.name.clone(), increments: s.increments, linear: s.linear, target_scales: current.clone(), kind: s.kind.clone() });
+        let kind = super::path::resolve_step_kind(s, &field, &loc, &node_sets, &loads, &fixed)?;
+        steps.push(StepPlan { name: s.name.clone(), increments: s.increments, linear: s.linear, target_scales: current.clone(), kind });
     }
 
     // Monitors.
@@ -380,9 +383,10 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
         monitors.push(Monitor { name: m.name.clone(), node, dofs: m.dofs.clone() });
     }
 
+    let imperfection = scene.imperfection.as_ref().map(|imp| super::path::resolve_imperfection(imp, &loc, &loads)).transpose()?;
     let dofs = DofMap::new(&fixed);
     let model = Model { x0, frames0, elements, sections, parts, dofs, loads };
-    Ok(BuiltScene { model, steps, monitors, node_sets, quality })
+    Ok(BuiltScene { model, steps, monitors, node_sets, quality, imperfection })
 }
 
 fn check_young_poisson(young: f64, poisson: f64, bad: &dyn Fn(&str, &str) -> SceneError) -> Result<(), SceneError> {

@@ -461,6 +461,7 @@ impl<'m> Solver<'m> {
                         indefinite_tangent: false,
                         energy,
                         dynamics: Some(DynamicInfo { time: t, dt, kinetic_energy: ke, static_residual, at_rest, rejected, unstable_rests }),
+                        ..Default::default()
                     };
                     on_increment(&report, state, self);
                     if at_rest {

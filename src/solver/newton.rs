@@ -47,7 +47,7 @@ pub struct Timings {
 }
 
 /// A converged nominal increment.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Default, Serialize)]
 pub struct IncrementReport {
     /// Step index.
     pub step: usize,
@@ -69,6 +69,24 @@ pub struct IncrementReport {
     pub indefinite_tangent: bool,
     /// Strain energy.
     pub energy: f64,
+    /// Load factor λ of a path-following step (scales = start + λ (target − start)).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub load_factor: Option<f64>,
+    /// Negative pivots of the tangent at the converged state (its number of negative
+    /// eigenvalues by Sylvester's law; 0 when LLᵀ succeeds).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub negative_pivots: Option<usize>,
+    /// Current stiffness parameter S_p = (f·K⁻¹f)₁ / (f·K⁻¹f) for the step's load change f,
+    /// 1 at the step's first increment (Bergan et al. 1978); its sign changes at a limit point.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stiffness_parameter: Option<f64>,
+    /// "limit point" or "bifurcation" when this increment crossed one (change of the
+    /// negative-pivot count, or sign change of the stiffness parameter).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stability_event: Option<String>,
+    /// Linearized buckling results of a `Buckling` step.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub buckling: Option<super::BucklingReport>,
     /// Time-integration data of a `Dynamic` step (None for static steps).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub dynamics: Option<DynamicInfo>,
@@ -355,15 +373,35 @@ impl<'m> Solver<'m> {
         let mut scales = vec![0.0; nl];
         let total: usize = steps.iter().map(|s| s.increments.max(1)).sum();
         let mut done_before = 0usize;
+        let mut tracker = super::arclength::StabilityTracker::default();
         for (si, step) in steps.iter().enumerate() {
             let start = scales.clone();
             let n_inc = step.increments.max(1);
-            if let StepKind::Dynamic(ds) = &step.kind {
-                let frac = (done_before as f64 / total as f64, n_inc as f64 / total as f64);
-                self.run_dynamic_step(si, step, ds, &start, state, on_increment, progress, frac.0, frac.1)?;
-                scales = step.target_scales.clone();
-                done_before += n_inc;
-                continue;
+            tracker.new_step();
+            match &step.kind {
+                StepKind::Static | StepKind::StaticDamped => {}
+                StepKind::Dynamic(ds) => {
+                    let frac = (done_before as f64 / total as f64, n_inc as f64 / total as f64);
+                    self.run_dynamic_step(si, step, ds, &start, state, on_increment, progress, frac.0, frac.1)?;
+                    scales = step.target_scales.clone();
+                    done_before += n_inc;
+                    continue;
+                }
+                StepKind::ArcLength { .. } | StepKind::DisplacementControl { .. } => {
+                    let frac0 = done_before as f64 / total as f64;
+                    let frac1 = (done_before + n_inc) as f64 / total as f64;
+                    scales = self.run_path(si, step, &start, state, &mut tracker, on_increment, &mut |p: &Progress| {
+                        progress(&Progress { fraction: frac0 + p.fraction * (frac1 - frac0), ..p.clone() })
+                    })?;
+                    done_before += n_inc;
+                    continue;
+                }
+                StepKind::Buckling { modes, shift } => {
+                    let report = self.run_buckling(si, step, &start, state, *modes, *shift)?;
+                    on_increment(&report, state, self);
+                    done_before += n_inc;
+                    continue;
+                }
             }
             let at = |tau: f64| -> Vec<f64> { start.iter().zip(&step.target_scales).map(|(a, b)| a + tau * (b - a)).collect() };
             let mut tau = 0.0;
@@ -396,6 +434,11 @@ impl<'m> Solver<'m> {
                             }
                             if (tau - goal).abs() < 1e-12 {
                                 tau = goal;
+                                let (negative_pivots, stiffness_parameter, stability_event) = if step.linear {
+                                    (None, None, None)
+                                } else {
+                                    self.stability_at(state, &start, &step.target_scales, &mut tracker)
+                                };
                                 let report = IncrementReport {
                                     step: si,
                                     step_name: step.name.clone(),
@@ -407,7 +450,11 @@ impl<'m> Solver<'m> {
                                     cutbacks,
                                     indefinite_tangent: indefinite,
                                     energy,
+                                    negative_pivots,
+                                    stiffness_parameter,
+                                    stability_event,
                                     dynamics: None,
+                                    ..Default::default()
                                 };
                                 on_increment(&report, state, self);
                                 break;
