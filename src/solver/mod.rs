@@ -8,9 +8,11 @@ pub mod eigen;
 pub mod imperfection;
 pub mod linear;
 pub mod newton;
+pub mod nodal;
 
 pub use dynamics::{DynamicInfo, DynamicSettings, LumpedMass};
 pub use eigen::BucklingReport;
+pub use nodal::NodalForces;
 pub use newton::{IncrementReport, Progress, SolveError, Solver, StepPlan, Timings};
 
 use serde::{Deserialize, Serialize};

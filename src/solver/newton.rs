@@ -164,6 +164,8 @@ pub struct Solver<'m> {
     pub(super) values: Vec<f64>,
     pub(super) f_int: Vec<f64>,
     pub(super) f_ext: Vec<f64>,
+    /// Configuration-dependent nodal forces (contact), if any.
+    pub(super) nodal_forces: Option<Box<dyn super::NodalForces + 'm>>,
     /// Accumulated wall-time split.
     pub timings: Timings,
 }
@@ -185,8 +187,14 @@ impl<'m> Solver<'m> {
             cholesky,
             f_int: vec![0.0; ndof],
             f_ext: vec![0.0; ndof],
+            nodal_forces: None,
             timings,
         })
+    }
+
+    /// Adds configuration-dependent nodal forces (e.g. contact) to every later assembly.
+    pub fn set_nodal_forces(&mut self, forces: Box<dyn super::NodalForces + 'm>) {
+        self.nodal_forces = Some(forces);
     }
 
     /// Equations, stored tangent entries (upper triangle) and factor entries.
@@ -226,6 +234,16 @@ impl<'m> Solver<'m> {
         )?;
         self.timings.assembly += info.seconds;
         self.model.external_force(state, scales, &mut self.f_ext);
+        if let Some(forces) = &self.nodal_forces {
+            let mut jacobian = Vec::new();
+            forces.add(self.model, state, &mut self.f_ext, &mut jacobian);
+            if tangent {
+                let p = &self.assembler.pattern;
+                for (n, j) in &jacobian {
+                    super::nodal::add_node_block(self.model, &p.col_ptr, &p.row_idx, &mut self.values, *n, j);
+                }
+            }
+        }
         Ok(info.energy)
     }
 
