@@ -236,7 +236,9 @@ fn nodal_force_hook_adds_springs_to_residual_and_tangent() {
     let mut solver = Solver::new(&built.model, sc.solver.clone()).expect("solver");
     solver.set_nodal_forces(Box::new(TipSprings { nodes: tip.clone(), k: k_b / tip.len() as f64 }));
     let mut state = built.model.initial_state();
-    solver.run(&dynamic, &mut state, &mut |_, _, _| {}, &mut |_| {}).err().map(|e| panic!("{e}"));
+    if let Err(e) = solver.run(&dynamic, &mut state, &mut |_, _, _| {}, &mut |_| {}) {
+        panic!("{e}");
+    }
     let rel = solver.static_residual(&mut state, &[4.0e4]).expect("evaluable");
     println!("static residual at rest {rel:e}");
     let f_int = solver.internal_force().to_vec();

@@ -96,7 +96,7 @@ pub fn check_settings(ds: &DynamicSettings) -> Option<(&'static str, &'static st
         Some(("dt", "expected a positive first time step"))
     } else if !pos(ds.dt_min) || ds.dt_min > ds.dt {
         Some(("dt_min", "expected a positive smallest time step no larger than dt"))
-    } else if !(ds.dt_max >= ds.dt) {
+    } else if ds.dt_max.is_nan() || ds.dt_max < ds.dt {
         Some(("dt_max", "expected a largest time step no smaller than dt"))
     } else if !(ds.ramp_time.is_finite() && ds.ramp_time >= 0.0) {
         Some(("ramp_time", "expected a non-negative ramp time"))
