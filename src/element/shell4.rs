@@ -193,6 +193,8 @@ struct Term {
     w: f64,
     p: Lin,
     q: Lin,
+    /// p and q are the same form (E_ξξ, E_ηη), evaluated once.
+    same: bool,
 }
 
 /// The 4-node shell element: reference geometry and section.
@@ -229,22 +231,94 @@ fn base_forms(xi: f64, eta: f64, zeta: f64, h: f64) -> [Lin; 3] {
     g
 }
 
-/// Integration-point data that depends only on the reference state.
+/// Strain terms of one integration point of a section rule: the natural base-vector forms at
+/// the point and, per natural component, its one or two (tied) terms.
+#[derive(Clone, Debug)]
+struct RulePoint {
+    /// Gauss weight (in-plane × thickness).
+    w: f64,
+    /// Base-vector forms g_ξ, g_η, g_ζ at the point.
+    g: [Lin; 3],
+    /// Strain terms of the five natural components.
+    terms: [[Option<Term>; 2]; 5],
+}
+
+/// Integration rule of a section: 2×2 points in the plane times the thickness rule, each with
+/// its strain terms (MITC4 tying or SRI centre sampling). Depends only on thickness, shear
+/// treatment and thickness points, so one rule serves every element of a section.
+#[derive(Clone, Debug)]
+pub struct SectionRule {
+    points: Vec<RulePoint>,
+}
+
+impl SectionRule {
+    /// Builds the rule of `section`.
+    pub fn new(section: &Section) -> Result<Self, ElementFailure> {
+        let (pz, wz) = gauss_legendre(section.thickness_points).ok_or(ElementFailure::ThicknessRule(section.thickness_points))?;
+        let (p2, _) = gauss_legendre(2).ok_or(ElementFailure::ThicknessRule(2))?;
+        let mut points = Vec::with_capacity(4 * pz.len());
+        for &eta in p2 {
+            for &xi in p2 {
+                for (&z, &w) in pz.iter().zip(wz) {
+                    points.push(rule_point(xi, eta, z, w, section.thickness, section.shear));
+                }
+            }
+        }
+        Ok(Self { points })
+    }
+}
+
+/// Strain terms at (ξ, η, ζ) with weight `w` for thickness `h` and shear treatment `shear`.
+fn rule_point(xi: f64, eta: f64, zeta: f64, w: f64, h: f64, shear: ShearTreatment) -> RulePoint {
+    let g = base_forms(xi, eta, zeta, h);
+    let one = |p: Lin, q: Lin, same: bool| [Some(Term { w: 1.0, p, q, same }), None];
+    let tied = |pts: [(f64, f64, f64); 2], comp: usize| {
+        let mut out = [None, None];
+        for (slot, &(xt, yt, wt)) in pts.iter().enumerate() {
+            if wt != 0.0 {
+                let gt = base_forms(xt, yt, zeta, h);
+                out[slot] = Some(Term { w: wt, p: gt[comp], q: gt[2], same: false });
+            }
+        }
+        out
+    };
+    let (xz, yz) = match shear {
+        ShearTreatment::Mitc4 => (
+            tied([(0.0, -1.0, 0.5 * (1.0 - eta)), (0.0, 1.0, 0.5 * (1.0 + eta))], 0),
+            tied([(-1.0, 0.0, 0.5 * (1.0 - xi)), (1.0, 0.0, 0.5 * (1.0 + xi))], 1),
+        ),
+        ShearTreatment::Sri => (tied([(0.0, 0.0, 1.0), (0.0, 0.0, 0.0)], 0), tied([(0.0, 0.0, 1.0), (0.0, 0.0, 0.0)], 1)),
+    };
+    RulePoint { w, g, terms: [one(g[0], g[0], true), one(g[1], g[1], true), one(g[0], g[1], false), xz, yz] }
+}
+
+/// Integration-point data that depends only on the reference state of one element.
+#[derive(Clone, Debug)]
 struct PointGeometry {
     /// Natural → local Voigt strain map, rows [E11, E22, 2E12, 2E13, 2E23], columns
     /// [E_ξξ, E_ηη, E_ξη, E_ξζ, E_ηζ].
     m: SMatrix<f64, 5, 5>,
     /// Weight × det J.
     wdet: f64,
-    /// Strain terms of the five natural components.
-    terms: [[Option<Term>; 2]; 5],
+}
+
+/// Reference data of one element for a given section rule, computed once per model:
+/// reference kinematic vectors, reference edge factors and per-point metric data.
+#[derive(Clone, Debug)]
+pub struct ElementGeometry {
+    /// Reference kinematic vectors X̄_a, D_a, E⁰_k.
+    r: [Vector3<f64>; NV],
+    /// Arc-to-chord factors φ of the reference edges.
+    phi0: [f64; 4],
+    /// Per integration point of the rule.
+    points: Box<[PointGeometry]>,
 }
 
 /// The kinematic vectors of one element state: reference values V⁰_i (X̄_a, D_a, E⁰_k), the
 /// changes V_i − V⁰_i, and the derivatives of the geodesic edge gradients.
-struct Kinematics {
+struct Kinematics<'g> {
     /// Reference values.
-    r: [Vector3<f64>; NV],
+    r: &'g [Vector3<f64>; NV],
     /// Changes from the reference (u_a, d_a − D_a, E_k − E⁰_k).
     dv: [Vector3<f64>; NV],
     /// Current edge differences v_k = d_b − d_a.
@@ -265,22 +339,27 @@ fn edge_gradient(v: &Vector3<f64>) -> Result<(f64, f64, f64), ElementFailure> {
 }
 
 impl<'a> ShellElement<'a> {
-    /// Reference kinematic vectors: X̄_a, D_a and E⁰_k = φ(|D_b − D_a|²)(D_b − D_a).
-    fn reference_vectors(&self) -> Result<[Vector3<f64>; NV], ElementFailure> {
+    /// Reference data of the element for `rule` (the rule of its section): kinematic
+    /// vectors X̄_a, D_a, E⁰_k = φ(|D_b − D_a|²)(D_b − D_a) and, per point, the strain map
+    /// to the lamina basis and weight × det J.
+    pub fn geometry(&self, rule: &SectionRule) -> Result<ElementGeometry, ElementFailure> {
         let mut r = [Vector3::zeros(); NV];
+        let mut phi0 = [1.0; 4];
         for a in 0..4 {
             r[a] = self.x0[a];
             r[VD + a] = self.d0[a];
         }
         for (k, &(a, b)) in EDGES.iter().enumerate() {
             let v = self.d0[b] - self.d0[a];
-            r[VE + k] = v * edge_gradient(&v)?.0;
+            phi0[k] = edge_gradient(&v)?.0;
+            r[VE + k] = v * phi0[k];
         }
-        Ok(r)
+        let points = rule.points.iter().map(|p| self.point_geometry(&r, &p.g, p.w)).collect::<Result<Vec<_>, _>>()?;
+        Ok(ElementGeometry { r, phi0, points: points.into_boxed_slice() })
     }
 
     /// Kinematic vectors of the state given by displacements `u` and director `frames`.
-    fn kinematics(&self, r: &[Vector3<f64>; NV], u: &[Vector3<f64>; 4], frames: &[DirectorFrame; 4]) -> Result<Kinematics, ElementFailure> {
+    fn kinematics<'g>(&self, geom: &'g ElementGeometry, u: &[Vector3<f64>; 4], frames: &[DirectorFrame; 4]) -> Result<Kinematics<'g>, ElementFailure> {
         let mut dv = [Vector3::zeros(); NV];
         for a in 0..4 {
             dv[a] = u[a];
@@ -291,21 +370,20 @@ impl<'a> ShellElement<'a> {
         let mut dphi = [[0.0; 2]; 4];
         for (k, &(a, b)) in EDGES.iter().enumerate() {
             let v0 = self.d0[b] - self.d0[a];
-            let phi0 = edge_gradient(&v0)?.0;
             v[k] = frames[b].d - frames[a].d;
             let (phi, d1, d2) = edge_gradient(&v[k])?;
             // E − E⁰ = φ (v − v⁰) + (φ − φ⁰) v⁰, free of cancellation for small changes.
-            dv[VE + k] = (dv[VD + b] - dv[VD + a]) * phi + v0 * (phi - phi0);
+            dv[VE + k] = (dv[VD + b] - dv[VD + a]) * phi + v0 * (phi - geom.phi0[k]);
             jac[k] = Matrix3::identity() * phi + v[k] * v[k].transpose() * (2.0 * d1);
             dphi[k] = [d1, d2];
         }
-        Ok(Kinematics { r: *r, dv, v, jac, dphi })
+        Ok(Kinematics { r: &geom.r, dv, v, jac, dphi })
     }
 
-    /// Reference geometry of the integration point (ξ, η, ζ) with weight `w`.
-    fn point_geometry(&self, r: &[Vector3<f64>; NV], xi: f64, eta: f64, zeta: f64, w: f64) -> Result<PointGeometry, ElementFailure> {
-        let h = self.section.thickness;
-        let g = base_forms(xi, eta, zeta, h);
+    /// Reference metric of an integration point with base-vector forms `g` and weight `w`:
+    /// det J and the map of natural strains to the local lamina basis (e3 normal to g_ξ, g_η;
+    /// e1 along the grain, or g_ξ, projected into the lamina).
+    fn point_geometry(&self, r: &[Vector3<f64>; NV], g: &[Lin; 3], w: f64) -> Result<PointGeometry, ElementFailure> {
         let gr = [g[0].eval(r), g[1].eval(r), g[2].eval(r)];
         let jm = Matrix3::from_columns(&gr);
         let det = jm.determinant();
@@ -332,71 +410,40 @@ impl<'a> ShellElement<'a> {
                 m[(r_, c)] = voigt * v;
             }
         }
-        let one = |p: Lin, q: Lin| [Some(Term { w: 1.0, p, q }), None];
-        let tied = |pts: [(f64, f64, f64); 2], comp: usize| {
-            let mut out = [None, None];
-            for (slot, &(xt, yt, wt)) in pts.iter().enumerate() {
-                if wt != 0.0 {
-                    let gt = base_forms(xt, yt, zeta, h);
-                    out[slot] = Some(Term { w: wt, p: gt[comp], q: gt[2] });
-                }
-            }
-            out
-        };
-        let (xz, yz) = match self.section.shear {
-            ShearTreatment::Mitc4 => (
-                tied([(0.0, -1.0, 0.5 * (1.0 - eta)), (0.0, 1.0, 0.5 * (1.0 + eta))], 0),
-                tied([(-1.0, 0.0, 0.5 * (1.0 - xi)), (1.0, 0.0, 0.5 * (1.0 + xi))], 1),
-            ),
-            ShearTreatment::Sri => (tied([(0.0, 0.0, 1.0), (0.0, 0.0, 0.0)], 0), tied([(0.0, 0.0, 1.0), (0.0, 0.0, 0.0)], 1)),
-        };
-        let terms = [one(g[0], g[0]), one(g[1], g[1]), one(g[0], g[1]), xz, yz];
-        Ok(PointGeometry { m, wdet: w * det, terms })
+        Ok(PointGeometry { m, wdet: w * det })
     }
 
-    /// Integration points (ξ, η, ζ, weight): 2×2 in the plane times the thickness rule.
-    fn points(&self) -> Result<Vec<(f64, f64, f64, f64)>, ElementFailure> {
-        let (pz, wz) = gauss_legendre(self.section.thickness_points)
-            .ok_or(ElementFailure::ThicknessRule(self.section.thickness_points))?;
-        let (p2, _) = gauss_legendre(2).ok_or(ElementFailure::ThicknessRule(2))?;
-        let mut out = Vec::with_capacity(4 * pz.len());
-        for &eta in p2 {
-            for &xi in p2 {
-                for (&z, &w) in pz.iter().zip(wz) {
-                    out.push((xi, eta, z, w));
-                }
+    /// Natural Green–Lagrange strains at a point and (when `grad` is given) their gradients
+    /// with respect to the kinematic vectors, written into `grad`. Each term is evaluated as
+    /// ½(P·Δq + Δp·Q + Δp·Δq) with Δp = p − P built from the changes of the kinematic vectors,
+    /// so small strains carry no cancellation error (½(p·q − P·Q) would lose about |X|²/|E|
+    /// of precision and leave a residual floor on stiff, thin shells).
+    /// Gradients: ∂(½ w p·q)/∂V_i = ½ w (c^p_i q + c^q_i p).
+    fn natural_strain(terms: &[[Option<Term>; 2]; 5], kin: &Kinematics, mut grad: Option<&mut [[Vector3<f64>; NV]; 5]>) -> Voigt5 {
+        let mut nat = Voigt5::zeros();
+        if let Some(g) = grad.as_deref_mut() {
+            for gc in g.iter_mut() {
+                gc.iter_mut().for_each(|v| *v = Vector3::zeros());
             }
         }
-        Ok(out)
-    }
-
-    /// Natural Green–Lagrange strains at a point and their gradients with respect to the
-    /// kinematic vectors. Each term is evaluated as ½(P·Δq + Δp·Q + Δp·Δq) with Δp = p − P
-    /// built from the changes of the kinematic vectors, so small strains carry no
-    /// cancellation error (½(p·q − P·Q) would lose about |X|²/|E| of precision and leave a
-    /// residual floor on stiff, thin shells). Gradients: ∂(½ w p·q)/∂V_i = ½ w (c^p_i q + c^q_i p).
-    fn natural_strain(pg: &PointGeometry, kin: &Kinematics, with_grad: bool) -> (Voigt5, [[Vector3<f64>; NV]; 5]) {
-        let mut nat = Voigt5::zeros();
-        let mut grad = [[Vector3::zeros(); NV]; 5];
         for c in 0..5 {
-            for t in pg.terms[c].iter().flatten() {
-                let pr = t.p.eval(&kin.r);
-                let qr = t.q.eval(&kin.r);
+            for t in terms[c].iter().flatten() {
+                let pr = t.p.eval(kin.r);
                 let dp = t.p.eval(&kin.dv);
-                let dq = t.q.eval(&kin.dv);
+                let (qr, dq) = if t.same { (pr, dp) } else { (t.q.eval(kin.r), t.q.eval(&kin.dv)) };
                 nat[c] += t.w * 0.5 * (pr.dot(&dq) + dp.dot(&qr) + dp.dot(&dq));
-                if with_grad {
+                if let Some(g) = grad.as_deref_mut() {
                     let (p, q) = ((pr + dp) * (0.5 * t.w), (qr + dq) * (0.5 * t.w));
                     for (i, ci) in t.p.terms() {
-                        grad[c][i] += q * ci;
+                        g[c][i] += q * ci;
                     }
                     for (i, ci) in t.q.terms() {
-                        grad[c][i] += p * ci;
+                        g[c][i] += p * ci;
                     }
                 }
             }
         }
-        (nat, grad)
+        nat
     }
 
     /// Maps a gradient over the kinematic vectors to the director side of node a: the 3-vector
@@ -431,28 +478,44 @@ impl<'a> ShellElement<'a> {
     }
 
     /// Internal force, tangent (if `with_tangent`) and energy in the configuration given by
-    /// nodal displacements `u` and current director frames `frames`.
-    ///
-    /// Tangent = Σ BᵀDB (material) + Aᵀ(S⊗I)A (second derivatives of the strain terms in the
-    /// kinematic vectors, S_ij = Σ ½ w s (c^p_i c^q_j + c^q_i c^p_j), A = ∂V/∂DOF) + f·∂²V
-    /// (second derivatives of the kinematic vectors: ∂²d_a = −(δα·Δα) d_a from the exponential
-    /// map, and ∂²E_k = J_k ∂²v_k + ∂²F[δv_k, Δv_k]).
+    /// nodal displacements `u` and current director frames `frames`. Builds the section rule
+    /// and the element's reference geometry on every call; the assembler caches both and
+    /// calls `response_with`.
     pub fn response(
         &self,
         u: &[Vector3<f64>; 4],
         frames: &[DirectorFrame; 4],
         with_tangent: bool,
     ) -> Result<ElementOutput, ElementFailure> {
-        let r = self.reference_vectors()?;
-        let kin = self.kinematics(&r, u, frames)?;
+        let rule = SectionRule::new(self.section)?;
+        let geom = self.geometry(&rule)?;
+        self.response_with(&rule, &geom, u, frames, with_tangent)
+    }
+
+    /// `response` with a precomputed section rule (`SectionRule::new(self.section)`) and
+    /// reference geometry (`self.geometry(rule)`).
+    ///
+    /// Tangent = Σ BᵀDB (material) + Aᵀ(S⊗I)A (second derivatives of the strain terms in the
+    /// kinematic vectors, S_ij = Σ ½ w s (c^p_i c^q_j + c^q_i c^p_j), A = ∂V/∂DOF) + f·∂²V
+    /// (second derivatives of the kinematic vectors: ∂²d_a = −(δα·Δα) d_a from the exponential
+    /// map, and ∂²E_k = J_k ∂²v_k + ∂²F[δv_k, Δv_k]).
+    pub fn response_with(
+        &self,
+        rule: &SectionRule,
+        geom: &ElementGeometry,
+        u: &[Vector3<f64>; 4],
+        frames: &[DirectorFrame; 4],
+        with_tangent: bool,
+    ) -> Result<ElementOutput, ElementFailure> {
+        let kin = self.kinematics(geom, u, frames)?;
         let mut k = if with_tangent { Some(Box::new(ElemMat::zeros())) } else { None };
         let mut energy = 0.0;
         // Generalised forces on the kinematic vectors and the second-derivative matrix S.
         let mut fv = [Vector3::zeros(); NV];
         let mut s = [[0.0; NV]; NV];
-        for (xi, eta, zeta, w) in self.points()? {
-            let pg = self.point_geometry(&r, xi, eta, zeta, w)?;
-            let (nat, grad) = Self::natural_strain(&pg, &kin, true);
+        let mut grad = [[Vector3::zeros(); NV]; 5];
+        for (rp, pg) in rule.points.iter().zip(geom.points.iter()) {
+            let nat = Self::natural_strain(&rp.terms, &kin, Some(&mut grad));
             let eps = pg.m * nat;
             let res = self.section.material.response(&eps).map_err(ElementFailure::Material)?;
             energy += pg.wdet * res.energy;
@@ -464,10 +527,11 @@ impl<'a> ShellElement<'a> {
             }
             if let Some(k) = k.as_mut() {
                 let b = pg.m * Self::natural_b(&grad, &kin, frames);
-                let db = res.tangent * b;
-                **k += b.transpose() * (db * pg.wdet);
+                let db = (res.tangent * pg.wdet) * b;
+                // Material part BᵀDB (columns of Bᵀ are contiguous: vectorised axpys).
+                **k += b.transpose() * db;
                 for c in 0..5 {
-                    for t in pg.terms[c].iter().flatten() {
+                    for t in rp.terms[c].iter().flatten() {
                         let sw = 0.5 * sn[c] * t.w;
                         for (i, ci) in t.p.terms() {
                             for (j, cj) in t.q.terms() {
@@ -490,14 +554,13 @@ impl<'a> ShellElement<'a> {
             force[5 * a + 4] = feff[a].dot(&frames[a].t2);
         }
         if let Some(k) = k.as_mut() {
-            self.add_geometric_tangent(k, &s, &fv, &feff, &kin, frames);
+            Self::add_geometric_tangent(k, &s, &fv, &feff, &kin, frames);
         }
         Ok(ElementOutput { force, stiffness: k, energy })
     }
 
     /// Adds Aᵀ(S⊗I)A and the f·∂²V terms (see `response`) to the tangent `k`.
     fn add_geometric_tangent(
-        &self,
         k: &mut ElemMat,
         s: &[[f64; NV]; NV],
         fv: &[Vector3<f64>; NV],
@@ -586,11 +649,12 @@ impl<'a> ShellElement<'a> {
     /// Mid-surface lamina strain and stress at the element centre (for output), from nodal
     /// displacements `u` and current frames.
     pub fn centre_state(&self, u: &[Vector3<f64>; 4], frames: &[DirectorFrame; 4]) -> Result<(Voigt5, Voigt5), ElementFailure> {
-        let r = self.reference_vectors()?;
-        let kin = self.kinematics(&r, u, frames)?;
-        let pg = self.point_geometry(&r, 0.0, 0.0, 0.0, 1.0)?;
-        let (nat, _) = Self::natural_strain(&pg, &kin, false);
-        let eps = pg.m * nat;
+        let rp = rule_point(0.0, 0.0, 0.0, 1.0, self.section.thickness, self.section.shear);
+        let rule = SectionRule { points: vec![rp.clone()] };
+        let geom = self.geometry(&rule)?;
+        let kin = self.kinematics(&geom, u, frames)?;
+        let nat = Self::natural_strain(&rp.terms, &kin, None);
+        let eps = geom.points[0].m * nat;
         let res = self.section.material.response(&eps).map_err(ElementFailure::Material)?;
         Ok((eps, res.stress))
     }
