@@ -56,3 +56,44 @@ fn buckling_at_a_preloaded_state_gives_the_remaining_margin() {
     let critical = &s.increments.last().expect("increments").buckling.as_ref().expect("buckling").critical_scales[0];
     assert!((critical[0] / lam_cr - 1.0).abs() < 1e-3, "critical scale {} vs {lam_cr}", critical[0]);
 }
+
+/// The `Buckling` step writes its modes as VTU point fields `mode_k` (3 components) and
+/// `mode_k_tilt` (2) for every node, scaled to a largest translation of 1, and lists the
+/// file in summary.json; the first mode of the square plate is the one-half-wave bulge, so
+/// its centre node carries the largest (unit, out-of-plane) translation.
+#[test]
+fn buckling_modes_are_written_as_vtu_point_fields() {
+    use plyshell::analysis::{self, RunOptions};
+    use plyshell::scene;
+    let text = bench::scenes::PLATE_BUCKLING
+        .replace("nx: 16, ny: 16", "nx: 8, ny: 8")
+        .replace("    monitors:", "    output: (binary: false),\n    monitors:");
+    let sc = scene::parse("plate", &text).expect("parse");
+    let built = scene::build(&sc, "plate", &text).expect("build");
+    let out = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("target/test-output/buckling_modes");
+    let _ = std::fs::remove_dir_all(&out);
+    let s = analysis::run(&sc, &built, &RunOptions { out_dir: Some(out.clone()) }, &mut |_| {}).expect("solve");
+    let name = "plate_buckling_buckling_step1.vtu";
+    assert!(s.files.iter().any(|f| f == name), "{:?}", s.files);
+    let vtu = std::fs::read_to_string(out.join(name)).expect("mode file");
+    let n_points = built.model.n_nodes();
+    for k in 1..=4 {
+        for (field, comps) in [(format!("mode_{k}"), 3), (format!("mode_{k}_tilt"), 2)] {
+            let tag = format!("Name=\"{field}\"");
+            let at = vtu.find(&tag).unwrap_or_else(|| panic!("no {field}"));
+            let body = &vtu[at..];
+            let start = body.find('>').expect("tag end") + 1;
+            let end = body.find("</DataArray>").expect("array end");
+            let values: Vec<f64> = body[start..end].split_whitespace().map(|v| v.parse().expect("number")).collect();
+            assert_eq!(values.len(), comps * n_points, "{field}");
+            if comps == 3 {
+                let largest = values.chunks(3).map(|t| (t[0] * t[0] + t[1] * t[1] + t[2] * t[2]).sqrt()).fold(0.0, f64::max);
+                assert!((largest - 1.0).abs() < 1e-12, "{field}: largest translation {largest}");
+                if k == 1 {
+                    let centre = built.node_sets["centre"][0];
+                    assert!((values[3 * centre + 2].abs() - 1.0).abs() < 1e-9, "mode 1 at the centre: {}", values[3 * centre + 2]);
+                }
+            }
+        }
+    }
+}

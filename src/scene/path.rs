@@ -30,15 +30,15 @@ pub(super) fn resolve_step_kind(
     let path_following = matches!(kind, StepKind::ArcLength { .. } | StepKind::DisplacementControl { .. } | StepKind::Buckling { .. });
     if path_following {
         for lname in s.scale.keys() {
-            if let Some(l) = loads.iter().find(|l| &l.name == lname) {
-                if matches!(l.kind, LoadKind::Displacements(_)) {
-                    return Err(loc.at_value(
-                        &s.name,
-                        lname,
-                        format!("{field}.scale[{lname}]"),
-                        "a prescribed-displacement load cannot be scaled in an arc-length, displacement-control or buckling step; change it in a Static step",
-                    ));
-                }
+            if let Some(l) = loads.iter().find(|l| &l.name == lname)
+                && matches!(l.kind, LoadKind::Displacements(_))
+            {
+                return Err(loc.at_value(
+                    &s.name,
+                    lname,
+                    format!("{field}.scale[{lname}]"),
+                    "a prescribed-displacement load cannot be scaled in an arc-length, displacement-control or buckling step; change it in a Static step",
+                ));
             }
         }
         if s.linear {
@@ -65,10 +65,10 @@ pub(super) fn resolve_step_kind(
             if !positive(*max_load_factor) {
                 return Err(bad("max_load_factor", format!("expected a positive load factor, found {max_load_factor}")));
             }
-            if let Some(d) = max_displacement {
-                if !positive(*d) {
-                    return Err(bad("max_displacement", format!("expected a positive displacement, found {d}")));
-                }
+            if let Some(d) = max_displacement
+                && !positive(*d)
+            {
+                return Err(bad("max_displacement", format!("expected a positive displacement, found {d}")));
             }
         }
         StepKind::DisplacementControl { set, dof, value, global_dof } => {

@@ -24,8 +24,10 @@
 //! negative pivots (Sylvester inertia, see `SparseCholesky::negative_pivots`) and the
 //! current stiffness parameter S_p = (f·K⁻¹f)₁/(f·K⁻¹f) (Bergan, Horrigmoe, Bråkeland &
 //! Søreide 1978) are reported. A change of the pivot count with a sign change of S_p is a
-//! limit point (the critical mode is not orthogonal to f); a change without one is a
-//! bifurcation; a sign change of S_p alone is a limit point as well.
+//! limit point (the critical mode is not orthogonal to f, f·K⁻¹f passes through ±∞); a
+//! change without one is a bifurcation (the mode is orthogonal to f). A sign change of S_p
+//! with an unchanged pivot count is no critical point: f·K⁻¹f passes through zero, the
+//! displacement conjugate to f turns back (the turning points of a snap-back).
 
 use std::time::Instant;
 
@@ -60,9 +62,12 @@ impl StabilityTracker {
         let sign_flip = matches!((self.previous_sign, sign), (Some(a), Some(b)) if a != b);
         let changed = self.previous_pivots.is_some_and(|p| p != pivots);
         let event = match (changed, sign_flip) {
-            (true, true) | (false, true) => Some(format!(
+            (true, true) => Some(format!(
                 "limit point: S_p changed sign, negative pivots {} -> {pivots}",
                 self.previous_pivots.map_or("?".into(), |p| p.to_string())
+            )),
+            (false, true) => Some(format!(
+                "displacement turning point (snap-back): S_p changed sign through infinity with {pivots} negative pivots; not a critical point"
             )),
             (true, false) => Some(format!(
                 "bifurcation: negative pivots {} -> {pivots} without a sign change of S_p",

@@ -80,8 +80,9 @@ pub struct IncrementReport {
     /// 1 at the step's first increment (Bergan et al. 1978); its sign changes at a limit point.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub stiffness_parameter: Option<f64>,
-    /// "limit point" or "bifurcation" when this increment crossed one (change of the
-    /// negative-pivot count, or sign change of the stiffness parameter).
+    /// "limit point" (negative-pivot count and sign of the stiffness parameter change),
+    /// "bifurcation" (count changes alone) or "displacement turning point" (sign alone,
+    /// a snap-back) when this increment crossed one.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub stability_event: Option<String>,
     /// Linearized buckling results of a `Buckling` step.
