@@ -39,6 +39,8 @@ pub struct BuiltScene {
     pub node_sets: BTreeMap<String, Vec<usize>>,
     /// Mesh quality per part.
     pub quality: Vec<(String, MeshQuality)>,
+    /// Seams (ties) of the model.
+    pub seams: Vec<crate::garment::SeamInfo>,
 }
 
 fn v3(a: [f64; 3]) -> Vector3<f64> {
@@ -122,7 +124,10 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
         if !(1..=5).contains(&p.thickness_points) {
             return Err(loc.at(Some(&p.name), Some("thickness_points"), format!("{field}.thickness_points"), "expected 1 to 5 Gauss points"));
         }
-        let m = make_mesh(&p.mesh, base_dir).map_err(|e| loc.at(Some(&p.name), Some("mesh"), format!("{field}.mesh"), e.to_string()))?;
+        let mut m = make_mesh(&p.mesh, base_dir).map_err(|e| loc.at(Some(&p.name), Some("mesh"), format!("{field}.mesh"), e.to_string()))?;
+        if let Some(o) = p.offset {
+            m.nodes.iter_mut().for_each(|x| *x += v3(o));
+        }
         quality.push((p.name.clone(), m.quality()));
         let first_node = x0.len();
         let first_element = elements.len();
@@ -319,6 +324,7 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
                 }
                 LoadKind::Displacements(nodes.iter().map(|&n| (NODE_DOFS * n + k, *value)).collect())
             }
+            LoadSpec::Closure => LoadKind::Forces(Vec::new()),
         };
         loads.push(Load { name: name.clone(), kind });
     }
@@ -367,9 +373,12 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
         monitors.push(Monitor { name: m.name.clone(), node, dofs: m.dofs.clone() });
     }
 
-    let dofs = DofMap::new(&fixed);
+    let mut frames0 = frames0;
+    let (ties, seams) = crate::garment::build_scene_seams(&scene.seams, &loc, &node_sets, &loads, &x0, &mut frames0)?;
+    crate::garment::apply_tapes(&seams, &x0, &mut elements, &mut sections);
+    let dofs = DofMap::with_ties(&fixed, ties).map_err(|e| loc.at(None, Some("seams"), "seams", e))?;
     let model = Model { x0, frames0, elements, sections, parts, dofs, loads };
-    Ok(BuiltScene { model, steps, monitors, node_sets, quality })
+    Ok(BuiltScene { model, steps, monitors, node_sets, quality, seams })
 }
 
 fn check_young_poisson(young: f64, poisson: f64, bad: &dyn Fn(&str, &str) -> SceneError) -> Result<(), SceneError> {

@@ -40,6 +40,27 @@ pub struct Scene {
     /// Solver controls.
     #[serde(default)]
     pub solver: SolverSettings,
+    /// Seams: master–slave ties between node rows of the parts.
+    #[serde(default)]
+    pub seams: Vec<SeamSpec>,
+}
+
+/// A seam between two ordered node sets (e.g. `Edge` selectors), running the same way.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SeamSpec {
+    /// Seam name.
+    pub name: String,
+    /// Master node row (a node set).
+    pub master: String,
+    /// Slave node row (a node set); make the finer row the slave.
+    pub slave: String,
+    /// Plain (hinge), Welded or Taped.
+    pub kind: crate::garment::SeamKind,
+    /// A `Closure` load pattern whose scale drives the initial gap between the rows to zero
+    /// (virtual sewing); without it the initial gap is kept.
+    #[serde(default)]
+    pub closing: Option<String>,
 }
 
 /// A material model and its constants.
@@ -85,6 +106,9 @@ pub struct PartSpec {
     /// Lamina e1 direction (material grain); default the element's ξ direction.
     #[serde(default)]
     pub grain: Option<[f64; 3]>,
+    /// Rigid translation applied to the generated mesh.
+    #[serde(default)]
+    pub offset: Option<[f64; 3]>,
 }
 
 fn two() -> usize {
@@ -187,6 +211,8 @@ pub enum LoadSpec {
     Gravity { part: String, areal_density: f64, g: [f64; 3] },
     /// Prescribed translation of the set's nodes.
     Displacement { set: String, dof: Dof, value: f64 },
+    /// No force: its scale (0 → 1) closes the gaps of the seams that name it (sewing).
+    Closure,
 }
 
 /// A solution step: load scales ramped linearly over its increments.
