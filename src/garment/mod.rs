@@ -1,9 +1,17 @@
 //! Garments: panels, plies and seams. Seams become master–slave ties in the shell model.
 
+pub mod assemble;
+pub mod graph;
+pub mod mesh;
+pub mod place;
 pub mod seam;
+pub mod spec;
 pub mod tape;
 
 pub use seam::{seam_ties, SeamInfo, SeamKind};
+pub use assemble::{GarmentMesh, GarmentPart};
+pub use graph::GarmentGraph;
+pub use spec::*;
 pub use tape::apply_tapes;
 
 use std::collections::BTreeMap;

@@ -41,6 +41,8 @@ pub struct BuiltScene {
     pub quality: Vec<(String, MeshQuality)>,
     /// Seams (ties) of the model.
     pub seams: Vec<crate::garment::SeamInfo>,
+    /// Warnings (e.g. garment panels neither seamed nor supported), located in the file.
+    pub warnings: Vec<String>,
 }
 
 fn v3(a: [f64; 3]) -> Vector3<f64> {
@@ -89,7 +91,7 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
     }
 
     // Parts and meshes.
-    if scene.parts.is_empty() {
+    if scene.parts.is_empty() && scene.garment.is_none() {
         return Err(loc.at(None, Some("parts"), "parts", "expected at least one part"));
     }
     let mut x0 = Vec::new();
@@ -140,6 +142,29 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
         d0.extend_from_slice(&m.directors);
         parts.push(PartInfo { name: p.name.clone(), first_node, n_nodes: m.nodes.len(), first_element, n_elements: m.quads.len() });
         meshes.push(m);
+    }
+    // Garment plies as further parts.
+    let material_names: std::collections::BTreeSet<String> = materials.keys().map(|k| k.to_string()).collect();
+    let garment = match &scene.garment {
+        Some(g) => Some((g, crate::garment::GarmentMesh::build(g, &loc, &material_names)?)),
+        None => None,
+    };
+    let mut garment_first_node = Vec::new();
+    if let Some((_, gm)) = &garment {
+        for gp in &gm.parts {
+            let material = materials.get(gp.material.as_str()).cloned().ok_or_else(|| loc.at_value(&gp.name, &gp.material, "garment.plies", "unknown material"))?;
+            let (first_node, first_element) = (x0.len(), elements.len());
+            sections.push(Section { thickness: gp.thickness, shear: Default::default(), thickness_points: 2, material });
+            for (q, g) in gp.mesh.quads.iter().zip(&gp.grains) {
+                elements.push(ElementDef { nodes: q.map(|n| n + first_node), section: sections.len() - 1, part: parts.len(), grain: Some(*g) });
+            }
+            x0.extend_from_slice(&gp.mesh.nodes);
+            d0.extend_from_slice(&gp.mesh.directors);
+            quality.push((gp.name.clone(), gp.mesh.quality()));
+            parts.push(PartInfo { name: gp.name.clone(), first_node, n_nodes: gp.mesh.nodes.len(), first_element, n_elements: gp.mesh.quads.len() });
+            garment_first_node.push(first_node);
+            meshes.push(gp.mesh.clone());
+        }
     }
     let n_nodes = x0.len();
     let part_index = |name: &str| parts.iter().position(|p: &PartInfo| p.name == name);
@@ -374,11 +399,24 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
     }
 
     let mut frames0 = frames0;
-    let (ties, seams) = crate::garment::build_scene_seams(&scene.seams, &loc, &node_sets, &loads, &x0, &mut frames0)?;
+    let (mut ties, mut seams) = crate::garment::build_scene_seams(&scene.seams, &loc, &node_sets, &loads, &x0, &mut frames0)?;
+    let mut warnings = Vec::new();
+    if let Some((g, gm)) = &garment {
+        let (t, s) = gm.ties(g, &loc, &garment_first_node, &loads, &x0, &mut frames0)?;
+        ties.extend(t);
+        seams.extend(s);
+        let supported: Vec<bool> = gm
+            .parts
+            .iter()
+            .zip(&garment_first_node)
+            .map(|(p, &f)| fixed[NODE_DOFS * f..NODE_DOFS * (f + p.mesh.nodes.len())].iter().any(|&x| x))
+            .collect();
+        warnings.extend(gm.unsupported(g, &loc, &supported).into_iter().map(|e| e.to_string()));
+    }
     crate::garment::apply_tapes(&seams, &x0, &mut elements, &mut sections);
     let dofs = DofMap::with_ties(&fixed, ties).map_err(|e| loc.at(None, Some("seams"), "seams", e))?;
     let model = Model { x0, frames0, elements, sections, parts, dofs, loads };
-    Ok(BuiltScene { model, steps, monitors, node_sets, quality, seams })
+    Ok(BuiltScene { model, steps, monitors, node_sets, quality, seams, warnings })
 }
 
 fn check_young_poisson(young: f64, poisson: f64, bad: &dyn Fn(&str, &str) -> SceneError) -> Result<(), SceneError> {

@@ -43,6 +43,9 @@ pub struct Scene {
     /// Seams: master–slave ties between node rows of the parts.
     #[serde(default)]
     pub seams: Vec<SeamSpec>,
+    /// A garment (panels, plies, seams, stitch lines) whose plies become further parts.
+    #[serde(default)]
+    pub garment: Option<crate::garment::GarmentSpec>,
 }
 
 /// A seam between two ordered node sets (e.g. `Edge` selectors), running the same way.
