@@ -208,6 +208,45 @@ impl GarmentMesh {
         Ok((ties, infos))
     }
 
+    /// Export layout: ids of panels, plies and materials per model part (garment parts start
+    /// at model part `first_part`), and the flat pattern laid out panel beside panel (gap of
+    /// a tenth of the largest panel) with ply k shifted by −k·(that gap) in z.
+    pub fn layout(&self, spec: &GarmentSpec, first_part: usize, first_node: &[usize], n_nodes: usize) -> super::export::GarmentLayout {
+        let plies: Vec<String> = spec.plies.keys().cloned().collect();
+        let mut materials: Vec<String> = spec.plies.values().map(|p| p.material.clone()).collect();
+        materials.sort();
+        materials.dedup();
+        let mut part_tags = vec![[-1; 3]; first_part];
+        for gp in &self.parts {
+            let ply_name = &spec.panels[gp.panel].plies[gp.ply];
+            let ply = plies.iter().position(|p| p == ply_name).map_or(-1, |i| i as i32);
+            let mat = materials.iter().position(|m| *m == gp.material).map_or(-1, |i| i as i32);
+            part_tags.push([gp.panel as i32, ply, mat]);
+        }
+        let extent = |pat: &PatternMesh| {
+            let (lo, hi) = pat.uv.iter().fold(([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]), |(lo, hi), p| ([lo[0].min(p[0]), lo[1].min(p[1])], [hi[0].max(p[0]), hi[1].max(p[1])]));
+            (lo, hi)
+        };
+        let gap = 0.1 * self.patterns.iter().map(|p| { let (lo, hi) = extent(p); (hi[0] - lo[0]).max(hi[1] - lo[1]) }).fold(0.0, f64::max);
+        let mut shift = Vec::with_capacity(self.patterns.len());
+        let mut x = 0.0;
+        for p in &self.patterns {
+            let (lo, hi) = extent(p);
+            shift.push([x - lo[0], -lo[1]]);
+            x += hi[0] - lo[0] + gap;
+        }
+        let mut flat = vec![None; n_nodes];
+        for (gp, &f) in self.parts.iter().zip(first_node) {
+            let pat = &self.patterns[gp.panel];
+            for (n, uv) in pat.uv.iter().enumerate() {
+                if let Some(slot) = flat.get_mut(f + n) {
+                    *slot = Some([uv[0] + shift[gp.panel][0], uv[1] + shift[gp.panel][1], -(gp.ply as f64) * gap]);
+                }
+            }
+        }
+        super::export::GarmentLayout { panels: spec.panels.iter().map(|p| p.name.clone()).collect(), plies, materials, part_tags, flat }
+    }
+
     /// Warnings for connected groups of panels of which no node is supported (`supported`
     /// tells, per garment part, whether any of its nodes has a fixed DOF).
     pub fn unsupported(&self, spec: &GarmentSpec, loc: &Locator, supported: &[bool]) -> Vec<SceneError> {

@@ -1,6 +1,7 @@
 //! Garments: panels, plies and seams. Seams become master–slave ties in the shell model.
 
 pub mod assemble;
+pub mod export;
 pub mod graph;
 pub mod mesh;
 pub mod place;

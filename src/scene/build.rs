@@ -43,6 +43,8 @@ pub struct BuiltScene {
     pub seams: Vec<crate::garment::SeamInfo>,
     /// Warnings (e.g. garment panels neither seamed nor supported), located in the file.
     pub warnings: Vec<String>,
+    /// Panel, ply and material ids and the flat pattern, when the scene has a garment.
+    pub garment: Option<crate::garment::export::GarmentLayout>,
 }
 
 fn v3(a: [f64; 3]) -> Vector3<f64> {
@@ -150,6 +152,7 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
         None => None,
     };
     let mut garment_first_node = Vec::new();
+    let garment_first_part = parts.len();
     if let Some((_, gm)) = &garment {
         for gp in &gm.parts {
             let material = materials.get(gp.material.as_str()).cloned().ok_or_else(|| loc.at_value(&gp.name, &gp.material, "garment.plies", "unknown material"))?;
@@ -401,7 +404,9 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
     let mut frames0 = frames0;
     let (mut ties, mut seams) = crate::garment::build_scene_seams(&scene.seams, &loc, &node_sets, &loads, &x0, &mut frames0)?;
     let mut warnings = Vec::new();
+    let mut layout = None;
     if let Some((g, gm)) = &garment {
+        layout = Some(gm.layout(g, garment_first_part, &garment_first_node, x0.len()));
         let (t, s) = gm.ties(g, &loc, &garment_first_node, &loads, &x0, &mut frames0)?;
         ties.extend(t);
         seams.extend(s);
@@ -416,7 +421,7 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
     crate::garment::apply_tapes(&seams, &x0, &mut elements, &mut sections);
     let dofs = DofMap::with_ties(&fixed, ties).map_err(|e| loc.at(None, Some("seams"), "seams", e))?;
     let model = Model { x0, frames0, elements, sections, parts, dofs, loads };
-    Ok(BuiltScene { model, steps, monitors, node_sets, quality, seams, warnings })
+    Ok(BuiltScene { model, steps, monitors, node_sets, quality, seams, warnings, garment: layout })
 }
 
 fn check_young_poisson(young: f64, poisson: f64, bad: &dyn Fn(&str, &str) -> SceneError) -> Result<(), SceneError> {
