@@ -8,8 +8,9 @@ use nalgebra::Vector3;
 use super::graph::{span_segments, GarmentGraph};
 use super::mesh::{mesh_polygon, PatternMesh};
 use super::spec::{GarmentSpec, SpanRef};
-use super::{seam_ties, SeamInfo, SeamKind};
-use crate::element::{DirectorFrame, NODE_DOFS};
+use super::seam::rigid_link;
+use super::{seam_ties, SeamInfo};
+use crate::element::DirectorFrame;
 use crate::mesh::ShellMesh;
 use crate::model::{Load, Tie};
 use crate::scene::{Locator, SceneError};
@@ -138,9 +139,10 @@ impl GarmentMesh {
 
     /// Seam and stitch-line ties. `first_node[k]` is the first global node of garment part k.
     /// Each seam ties ply k of panel b to ply k of panel a (or a's innermost ply) with the
-    /// seam's kind and closing load, and ties a's plies 1.. to its ply 0 along the span
-    /// (all plies sewn together). A stitch line ties every node of plies 1.. within half an
-    /// element of the line to the node of ply 0 at the same pattern point (translations).
+    /// seam's kind and closing load, and links a's plies 1.. rigidly to its ply 0 along the
+    /// span (all plies sewn together). A stitch line links every node of plies 1.. within
+    /// half an element of the line rigidly to the node of ply 0 at the same pattern point
+    /// ([`rigid_link`]: the stack's section stays straight there).
     #[allow(clippy::too_many_arguments)]
     pub fn ties(
         &self,
@@ -166,6 +168,12 @@ impl GarmentMesh {
                     loc.at_value(&s.name, l, format!("{field}.closing"), format!("no load pattern named \"{l}\" (declare it as `\"{l}\": Closure` in loads)"))
                 })?),
             };
+            if closing.is_some() && (spec.panels[pa].plies.len() > 1 || spec.panels[pb].plies.len() > 1) {
+                return Err(loc.at(Some(&s.name), Some("closing"), format!("{field}.closing"), format!(
+                    "seam \"{}\": sewing (closing) a seam of multi-ply panels is not supported yet; place the panels with the spans together",
+                    s.name
+                )));
+            }
             let row_a = span_row(&self.patterns[pa], &spec.panels[pa], &s.a);
             let row_b = span_row(&self.patterns[pb], &spec.panels[pb], &s.b);
             let global = |part: usize, row: &[usize]| -> Vec<usize> { row.iter().map(|n| n + first_node[part]).collect() };
@@ -175,8 +183,9 @@ impl GarmentMesh {
             let master = global(master_part, &row_a);
             for k in 1..na {
                 let part = self.part_of(pa, k).ok_or_else(|| err("missing ply".into()))?;
-                let (t, _) = seam_ties(&format!("{}:{}", s.name, k), SeamKind::Plain, x0, frames0, &master, &global(part, &row_a), None).map_err(err)?;
-                ties.extend(t);
+                for (&m, &sl) in master.iter().zip(&global(part, &row_a)) {
+                    ties.extend(rigid_link(m, sl, x0, frames0));
+                }
             }
             for k in 0..nb {
                 let part_b = self.part_of(pb, k).ok_or_else(|| err("missing ply".into()))?;
@@ -199,9 +208,7 @@ impl GarmentMesh {
             for k in 1..spec.panels[pi].plies.len() {
                 let Some(pk) = self.part_of(pi, k) else { continue };
                 for &n in &near {
-                    for c in 0..3 {
-                        ties.push(Tie { slave: NODE_DOFS * (first_node[pk] + n) + c, masters: vec![(NODE_DOFS * (first_node[p0] + n) + c, 1.0)], offset: 0.0, load: None });
-                    }
+                    ties.extend(rigid_link(first_node[p0] + n, first_node[pk] + n, x0, frames0));
                 }
             }
         }

@@ -177,6 +177,43 @@ pub fn seam_ties(
     Ok((ties, info))
 }
 
+/// Ties of a rigid link from master node `m` to slave node `s` (e.g. two plies of a stack
+/// joined through the thickness at a stitch): δu_s = δu_m + δθ_m × r with r = x_s − x_m and
+/// the master's rotation δθ = t2 δα1 − t1 δα2 (so that δd = δθ × d = t1 δα1 + t2 δα2), and
+/// the slave director tilted with the master's. The weights use the reference frames: the
+/// link is exact for small rotations of the stack and first-order beyond (its length
+/// drifts by about |r| θ²/2 at a rotation θ).
+pub fn rigid_link(m: usize, s: usize, x0: &[Vector3<f64>], frames0: &mut [DirectorFrame]) -> Vec<Tie> {
+    let r = x0[s] - x0[m];
+    if frames0[s].d.dot(&frames0[m].d) > 1.0 - 1e-12 {
+        frames0[s] = DirectorFrame::new(frames0[s].d, Some(frames0[m].t1));
+    }
+    let fm = frames0[m];
+    let (a1, a2) = (fm.t2.cross(&r), -fm.t1.cross(&r));
+    let mut ties = Vec::with_capacity(5);
+    for k in 0..3 {
+        let mut masters = vec![(NODE_DOFS * m + k, 1.0)];
+        if a1[k].abs() > 1e-15 * r.norm() {
+            masters.push((NODE_DOFS * m + 3, a1[k]));
+        }
+        if a2[k].abs() > 1e-15 * r.norm() {
+            masters.push((NODE_DOFS * m + 4, a2[k]));
+        }
+        ties.push(Tie { slave: NODE_DOFS * s + k, masters, offset: 0.0, load: None });
+    }
+    let fs = frames0[s];
+    for (k, tk) in [fs.t1, fs.t2].iter().enumerate() {
+        let masters: Vec<(usize, f64)> = [fm.t1, fm.t2]
+            .iter()
+            .enumerate()
+            .map(|(l, tl)| (NODE_DOFS * m + 3 + l, tk.dot(tl)))
+            .filter(|&(_, c)| c.abs() > 1e-14)
+            .collect();
+        ties.push(Tie { slave: NODE_DOFS * s + 3 + k, masters, offset: 0.0, load: None });
+    }
+    ties
+}
+
 impl SeamInfo {
     /// Seam force per unit length at each slave node: the tie force f_int,s − f_ext,s that
     /// the master side exerts on the slave node (translations; all-DOF vectors before or
