@@ -242,3 +242,46 @@ fn non_matching_seam_transmits_the_total_force() {
     println!("total {total:.9} N (expected {:.9}), worst local deviation {:.2} %", -1000.0 * B, 100.0 * worst);
     assert!((total + 1000.0 * B).abs() < 1e-9 * 1000.0 * B);
 }
+
+/// Taped seam: the clamped–clamped strip of the hinge test, welded and taped (tape width
+/// 2 elements each side, stiffness ×5). Reference: the stepped Timoshenko beam by the
+/// moment-area method on one half (s from the centre, zero slope at centre and clamp):
+/// M₀ = (P/2) ∫s/EI ÷ ∫1/EI, w = (P/2) ∫s²/EI − M₀ ∫s/EI + (P/2) ∫ds/(κGA). Tolerance 0.5 %.
+#[test]
+fn taped_seam_stiffens_a_strip_of_the_allowance_width() {
+    let n = 24;
+    let h = 0.5 * L / n as f64;
+    let c = 2.0 * h;
+    let f = 5.0;
+    let p = 0.04;
+    let sets = format!(r#"{CUT_SETS}, "ends": Plane(point: (0.0, 0.0, 0.0), normal: (1.0, 0.0, 0.0)), "far": Plane(point: ({L}, 0.0, 0.0), normal: (1.0, 0.0, 0.0))"#);
+    let parts = format!("{}, {}", part("a", 0.5 * L, n, 2, 0.0), part("b", 0.5 * L, n, 2, 0.5 * L));
+    let load = format!(r#"EdgeForce(set: "cut_a", force_per_length: (0.0, 0.0, {}))"#, p / B);
+    let seam = format!(r#"(name: "cut", master: "cut_a", slave: "cut_b", kind: Taped(width: {c}, stiffness_factor: {f}))"#);
+    let case = Case {
+        poisson: 0.0,
+        parts: &parts,
+        sets: &sets,
+        boundary: r#"Clamp(set: "ends"), Clamp(set: "far")"#,
+        seams: &seam,
+        load: &load,
+        linear: true,
+        increments: 1,
+        monitor_part: "a",
+        monitor: [0.5 * L, 0.0, 0.0],
+    };
+    let w = solve(&scene_text(&case))[0][1];
+    let a = 0.5 * L;
+    let ei = E * B * T.powi(3) / 12.0;
+    let kga = 5.0 / 6.0 * 0.5 * E * B * T;
+    let (e1, e2) = (ei, f * ei);
+    let i0 = c / e2 + (a - c) / e1;
+    let i1 = c * c / (2.0 * e2) + (a * a - c * c) / (2.0 * e1);
+    let i2 = c.powi(3) / (3.0 * e2) + (a.powi(3) - c.powi(3)) / (3.0 * e1);
+    let m0 = 0.5 * p * i1 / i0;
+    let expect = 0.5 * p * i2 - m0 * i1 + 0.5 * p * (c / (f * kga) + (a - c) / kga);
+    let welded = p * L.powi(3) / (192.0 * ei) + p * L / (4.0 * kga);
+    println!("taped: w = {w:.6e}, stepped beam {expect:.6e} (rel {:.3e}); untaped {welded:.6e}", rel(w, expect));
+    assert!(rel(w, expect) < 5e-3);
+    assert!(w < welded * 0.99);
+}
