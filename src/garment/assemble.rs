@@ -28,6 +28,8 @@ pub struct GarmentPart {
     pub material: String,
     /// Thickness.
     pub thickness: f64,
+    /// Mass per area (0: unset).
+    pub areal_density: f64,
     /// Placed mesh (edges: the panel's named spans).
     pub mesh: ShellMesh,
     /// Grain (warp) direction per quad, in 3D.
@@ -125,7 +127,8 @@ impl GarmentMesh {
                 mesh.validate().map_err(|e| loc.at(Some(&p.name), Some("outline"), format!("{field}.outline"), format!("panel \"{}\": {e}", p.name)))?;
                 let name = if p.plies.len() == 1 { p.name.clone() } else { format!("{}/{ply}", p.name) };
                 let material = spec.plies.get(ply).map(|x| x.material.clone()).unwrap_or_default();
-                parts.push(GarmentPart { name, panel: pi, ply: k, material, thickness: thick[k], mesh, grains: grains.clone() });
+                let areal_density = spec.plies.get(ply).map_or(0.0, |x| x.areal_density);
+                parts.push(GarmentPart { name, panel: pi, ply: k, material, thickness: thick[k], areal_density, mesh, grains: grains.clone() });
             }
             patterns.push(pattern);
         }

@@ -106,6 +106,9 @@ impl GarmentGraph {
                 let known: Vec<&str> = materials.iter().map(|s| s.as_str()).collect();
                 return Err(loc.at_value(name, &ply.material, format!("{field}.material"), format!("ply \"{name}\" has unknown material \"{}\"; defined materials: {}", ply.material, known.join(", "))));
             }
+            if !(ply.areal_density.is_finite() && ply.areal_density >= 0.0) {
+                return Err(loc.at(Some(name), Some("areal_density"), format!("{field}.areal_density"), format!("ply \"{name}\" needs a non-negative mass per area")));
+            }
             if !(ply.thickness.is_finite() && ply.thickness > 0.0) {
                 return Err(loc.at(Some(name), Some("thickness"), format!("{field}.thickness"), format!("ply \"{name}\" needs a positive thickness")));
             }

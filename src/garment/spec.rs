@@ -40,6 +40,9 @@ pub struct PlySpec {
     pub material: String,
     /// Thickness (m).
     pub thickness: f64,
+    /// Mass per area (kg/m²) for dynamic steps; 0: that of a Gravity load on the part.
+    #[serde(default)]
+    pub areal_density: f64,
 }
 
 /// A named edge span of a panel outline: from outline vertex `from` counter-clockwise to

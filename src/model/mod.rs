@@ -37,6 +37,8 @@ pub struct PartInfo {
     pub first_element: usize,
     /// Number of elements.
     pub n_elements: usize,
+    /// Mass per reference area (0: massless), for lumped masses.
+    pub areal_density: f64,
 }
 
 /// A named load pattern; its magnitude is scaled by the step's factor for this name.

@@ -142,7 +142,15 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
         }
         x0.extend_from_slice(&m.nodes);
         d0.extend_from_slice(&m.directors);
-        parts.push(PartInfo { name: p.name.clone(), first_node, n_nodes: m.nodes.len(), first_element, n_elements: m.quads.len() });
+        let gravity_density = scene.loads.values().find_map(|l| match l {
+            LoadSpec::Gravity { part, areal_density, .. } if *part == p.name => Some(*areal_density),
+            _ => None,
+        });
+        if !(p.areal_density.is_finite() && p.areal_density >= 0.0) {
+            return Err(loc.at(Some(&p.name), Some("areal_density"), format!("{field}.areal_density"), "expected a non-negative mass per area"));
+        }
+        let areal_density = if p.areal_density > 0.0 { p.areal_density } else { gravity_density.unwrap_or(0.0) };
+        parts.push(PartInfo { name: p.name.clone(), first_node, n_nodes: m.nodes.len(), first_element, n_elements: m.quads.len(), areal_density });
         meshes.push(m);
     }
     // Garment plies as further parts.
@@ -164,7 +172,12 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
             x0.extend_from_slice(&gp.mesh.nodes);
             d0.extend_from_slice(&gp.mesh.directors);
             quality.push((gp.name.clone(), gp.mesh.quality()));
-            parts.push(PartInfo { name: gp.name.clone(), first_node, n_nodes: gp.mesh.nodes.len(), first_element, n_elements: gp.mesh.quads.len() });
+            let gravity_density = scene.loads.values().find_map(|l| match l {
+                LoadSpec::Gravity { part, areal_density, .. } if *part == gp.name => Some(*areal_density),
+                _ => None,
+            });
+            let areal_density = if gp.areal_density > 0.0 { gp.areal_density } else { gravity_density.unwrap_or(0.0) };
+            parts.push(PartInfo { name: gp.name.clone(), first_node, n_nodes: gp.mesh.nodes.len(), first_element, n_elements: gp.mesh.quads.len(), areal_density });
             garment_first_node.push(first_node);
             meshes.push(gp.mesh.clone());
         }
@@ -379,7 +392,7 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
             current[i] = v;
         }
         let _ = si;
-        steps.push(StepPlan { name: s.name.clone(), increments: s.increments, linear: s.linear, target_scales: current.clone() });
+        steps.push(StepPlan { name: s.name.clone(), increments: s.increments, linear: s.linear, target_scales: current.clone(), kind: s.kind.clone() });
     }
 
     // Monitors.

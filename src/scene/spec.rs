@@ -5,7 +5,7 @@ use std::collections::BTreeMap;
 use serde::{Deserialize, Serialize};
 
 use crate::element::ShearTreatment;
-use crate::solver::SolverSettings;
+use crate::solver::{SolverSettings, StepKind};
 
 /// A whole analysis: parts, materials, supports, loads, steps and outputs.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -112,6 +112,10 @@ pub struct PartSpec {
     /// Rigid translation applied to the generated mesh.
     #[serde(default)]
     pub offset: Option<[f64; 3]>,
+    /// Mass per reference area for `Dynamic` steps; 0 (default): the areal density of a
+    /// Gravity load on this part, else massless.
+    #[serde(default)]
+    pub areal_density: f64,
 }
 
 fn two() -> usize {
@@ -234,6 +238,11 @@ pub struct StepSpec {
     /// they had at the end of the previous step.
     #[serde(default)]
     pub scale: BTreeMap<String, f64>,
+    /// How the step is solved: `Static` (default), `StaticDamped` (Levenberg–Marquardt
+    /// shift) or `Dynamic((dt: .., ..))` (pseudo-transient; `increments` is then unused and
+    /// every accepted time step is reported).
+    #[serde(default)]
+    pub kind: StepKind,
 }
 
 /// A monitored point: the node nearest to `point`, with the displacement components kept.

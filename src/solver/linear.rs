@@ -74,6 +74,11 @@ impl SparseCholesky {
         Ok(Self { pattern: sym, symbolic, l_values, buffer, kind: FactorKind::Llt, par })
     }
 
+    /// Which factorization the last successful numeric step produced.
+    pub fn kind(&self) -> FactorKind {
+        self.kind
+    }
+
     /// Number of stored values of the factor.
     pub fn factor_nnz(&self) -> usize {
         self.l_values.len()

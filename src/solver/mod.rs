@@ -1,8 +1,12 @@
 //! Nonlinear solution: load stepping with Newton–Raphson, line search and cut-back.
 
+pub mod damped;
+pub mod diagnose;
+pub mod dynamics;
 pub mod linear;
 pub mod newton;
 
+pub use dynamics::{DynamicInfo, DynamicSettings, LumpedMass};
 pub use newton::{IncrementReport, Progress, SolveError, Solver, StepPlan, Timings};
 
 use serde::{Deserialize, Serialize};
@@ -31,4 +35,20 @@ impl Default for SolverSettings {
     fn default() -> Self {
         Self { max_iterations: 30, residual_tol: 1e-7, energy_tol: 1e-14, line_search: true, max_cutbacks: 10, threads: 0 }
     }
+}
+
+/// How a step is solved.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub enum StepKind {
+    /// Load-controlled Newton–Raphson with cut-back (`newton.rs`).
+    #[default]
+    Static,
+    /// Static Newton with a Levenberg–Marquardt shift K + μ·k̄·I when the tangent is not
+    /// positive definite, μ adapted by a trust-region test on the potential energy and the
+    /// residual (`damped.rs`).
+    StaticDamped,
+    /// Pseudo-transient continuation: implicit (backward-Euler) dynamics with lumped mass
+    /// from the parts' areal density, integrated until the kinetic energy and the static
+    /// residual vanish (`dynamics.rs`).
+    Dynamic(DynamicSettings),
 }

@@ -12,8 +12,9 @@ use std::time::Instant;
 use serde::Serialize;
 
 use super::linear::{FactorKind, SparseCholesky};
-use super::SolverSettings;
+use super::{StepKind, SolverSettings};
 use crate::assembly::{Assembler, AssemblyFailure};
+use super::dynamics::DynamicInfo;
 use crate::element::NODE_DOFS;
 use crate::model::{Model, State, FIXED};
 
@@ -28,6 +29,8 @@ pub struct StepPlan {
     pub linear: bool,
     /// Target scale per load pattern at the end of the step (same order as `Model::loads`).
     pub target_scales: Vec<f64>,
+    /// How the step is solved (static Newton by default).
+    pub kind: StepKind,
 }
 
 /// Wall time split (s).
@@ -66,6 +69,9 @@ pub struct IncrementReport {
     pub indefinite_tangent: bool,
     /// Strain energy.
     pub energy: f64,
+    /// Time-integration data of a `Dynamic` step (None for static steps).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub dynamics: Option<DynamicInfo>,
 }
 
 /// Progress notification for a bar.
@@ -120,20 +126,20 @@ impl std::fmt::Display for SolveError {
 }
 
 /// Outcome of one attempted increment.
-enum Attempt {
+pub(super) enum Attempt {
     Converged { iterations: usize, residuals: Vec<f64>, indefinite: bool, energy: f64 },
     Failed { iteration: usize, residuals: Vec<f64>, worst_element: Option<usize>, cause: String },
 }
 
 /// A static solver bound to one model.
 pub struct Solver<'m> {
-    model: &'m Model,
-    settings: SolverSettings,
-    assembler: Assembler,
-    cholesky: SparseCholesky,
-    values: Vec<f64>,
-    f_int: Vec<f64>,
-    f_ext: Vec<f64>,
+    pub(super) model: &'m Model,
+    pub(super) settings: SolverSettings,
+    pub(super) assembler: Assembler,
+    pub(super) cholesky: SparseCholesky,
+    pub(super) values: Vec<f64>,
+    pub(super) f_int: Vec<f64>,
+    pub(super) f_ext: Vec<f64>,
     /// Accumulated wall-time split.
     pub timings: Timings,
 }
@@ -170,7 +176,7 @@ impl<'m> Solver<'m> {
     }
 
     /// Free-DOF residual r = f_int − f_ext; returns (‖r‖ / reference, reference).
-    fn residual(&self, r: &mut [f64]) -> (f64, f64) {
+    pub(super) fn residual(&self, r: &mut [f64]) -> (f64, f64) {
         let eq = &self.model.dofs.eq;
         let mut rr = 0.0;
         let mut fe = 0.0;
@@ -187,7 +193,7 @@ impl<'m> Solver<'m> {
         (rr.sqrt() / reference, reference)
     }
 
-    fn assemble(&mut self, state: &State, scales: &[f64], tangent: bool) -> Result<f64, AssemblyFailure> {
+    pub(super) fn assemble(&mut self, state: &State, scales: &[f64], tangent: bool) -> Result<f64, AssemblyFailure> {
         let info = self.assembler.assemble(
             self.model,
             state,
@@ -200,7 +206,7 @@ impl<'m> Solver<'m> {
     }
 
     /// Element touching the node with the largest free residual.
-    fn worst_element(&self, r: &[f64]) -> Option<usize> {
+    pub(super) fn worst_element(&self, r: &[f64]) -> Option<usize> {
         let eq = &self.model.dofs.eq;
         let mut best = (0.0, None);
         for (g, &e) in eq.iter().enumerate() {
@@ -346,6 +352,13 @@ impl<'m> Solver<'m> {
         for (si, step) in steps.iter().enumerate() {
             let start = scales.clone();
             let n_inc = step.increments.max(1);
+            if let StepKind::Dynamic(ds) = &step.kind {
+                let frac = (done_before as f64 / total as f64, n_inc as f64 / total as f64);
+                self.run_dynamic_step(si, step, ds, &start, state, on_increment, progress, frac.0, frac.1)?;
+                scales = step.target_scales.clone();
+                done_before += n_inc;
+                continue;
+            }
             let at = |tau: f64| -> Vec<f64> { start.iter().zip(&step.target_scales).map(|(a, b)| a + tau * (b - a)).collect() };
             let mut tau = 0.0;
             let mut dtau = 1.0 / n_inc as f64;
@@ -361,7 +374,11 @@ impl<'m> Solver<'m> {
                     let saved = state.clone();
                     let frac = (done_before as f64 + next * n_inc as f64) / total as f64;
                     let mut report_progress = |it: usize, res: f64| progress(&Progress { step: si, fraction: frac, iteration: it, residual: res });
-                    match self.attempt(state, &trial_scales, step.linear, &mut report_progress) {
+                    let outcome = match step.kind {
+                        StepKind::StaticDamped => self.attempt_damped(state, &trial_scales, &mut report_progress),
+                        _ => self.attempt(state, &trial_scales, step.linear, &mut report_progress),
+                    };
+                    match outcome {
                         Attempt::Converged { iterations: its, residuals, indefinite: ind, energy } => {
                             iterations += its;
                             indefinite |= ind;
@@ -384,12 +401,18 @@ impl<'m> Solver<'m> {
                                     cutbacks,
                                     indefinite_tangent: indefinite,
                                     energy,
+                                    dynamics: None,
                                 };
                                 on_increment(&report, state, self);
                                 break;
                             }
                         }
                         Attempt::Failed { iteration, residuals, worst_element, cause } => {
+                            let cause = if cutback_level >= self.settings.max_cutbacks {
+                                super::diagnose::explain(self.model, state, &cause, indefinite || self.cholesky.kind() == FactorKind::Ldlt)
+                            } else {
+                                cause
+                            };
                             *state = saved;
                             iterations += iteration;
                             if cutback_level >= self.settings.max_cutbacks {
