@@ -215,6 +215,10 @@ impl GarmentMesh {
                 }
             }
         }
+        // A node on two seams or on a seam and a stitch line keeps its first tie per DOF
+        // (it is already joined through that tie's chain).
+        let mut seen = std::collections::HashSet::new();
+        ties.retain(|t| seen.insert(t.slave));
         Ok((ties, infos))
     }
 
