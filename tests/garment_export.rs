@@ -93,7 +93,7 @@ fn garment_vtu_has_panel_ply_material_and_seam_lines() {
     let text = std::fs::read_to_string(path).expect("sleeve.ron").replace("increments: 10, scale: {\"sew\"", "increments: 5, scale: {\"sew\"");
     let out = Path::new(env!("CARGO_MANIFEST_DIR")).join("target/test-output/garment_export_sleeve");
     let summary = run(&text, &out);
-    let last = summary.files.iter().filter(|f| f.starts_with("sleeve_garment_0")).last().expect("a garment vtu").clone();
+    let last = summary.files.iter().rfind(|f| f.starts_with("sleeve_garment_0")).expect("a garment vtu").clone();
     let v = read(&out.join(&last));
     assert_eq!(v["counts"], serde_json::json!([360, 20]));
     for name in ["panel", "ply", "material"] {

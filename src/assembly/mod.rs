@@ -170,10 +170,10 @@ impl Assembler {
                         }
                         for &(r, wr) in &exp[i] {
                             for &(c, wc) in &exp[j] {
-                                if r <= c {
-                                    if let Some(s) = slot_of(r, c) {
-                                        list.push(((i * ELEMENT_DOFS + j) as u16, s, wr * wc));
-                                    }
+                                if r <= c
+                                    && let Some(s) = slot_of(r, c)
+                                {
+                                    list.push(((i * ELEMENT_DOFS + j) as u16, s, wr * wc));
                                 }
                             }
                         }

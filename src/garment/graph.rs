@@ -287,10 +287,5 @@ fn kind_problem(s: &super::spec::GarmentSeamSpec) -> Option<String> {
     if !(s.allowance.is_finite() && s.allowance >= 0.0 && s.stitch_spacing.is_finite() && s.stitch_spacing >= 0.0) {
         return Some(format!("seam \"{}\": allowance and stitch spacing must be non-negative", s.name));
     }
-    if let super::SeamKind::Taped { width, stiffness_factor } = s.kind {
-        if !(width.is_finite() && width >= 0.0 && stiffness_factor.is_finite() && stiffness_factor > 0.0) {
-            return Some(format!("seam \"{}\": a tape needs a non-negative width and a positive stiffness factor", s.name));
-        }
-    }
-    None
+    s.kind.problem().map(|p| format!("seam \"{}\": {p}", s.name))
 }

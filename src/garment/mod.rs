@@ -49,10 +49,8 @@ pub fn build_scene_seams(
         };
         let master = set(&s.master, "master")?;
         let slave = set(&s.slave, "slave")?;
-        if let SeamKind::Taped { width, stiffness_factor } = s.kind {
-            if !(width.is_finite() && width >= 0.0 && stiffness_factor.is_finite() && stiffness_factor > 0.0) {
-                return Err(loc.at(Some(&s.name), Some("kind"), format!("{field}.kind"), "a tape needs a non-negative width and a positive stiffness factor"));
-            }
+        if let Some(p) = s.kind.problem() {
+            return Err(loc.at(Some(&s.name), Some("kind"), format!("{field}.kind"), p));
         }
         let closing = match &s.closing {
             None => None,

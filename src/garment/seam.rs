@@ -39,6 +39,18 @@ impl SeamKind {
     pub fn ties_rotations(&self) -> bool {
         !matches!(self, SeamKind::Plain)
     }
+
+    /// What is wrong with the kind's parameters, if anything.
+    pub fn problem(&self) -> Option<&'static str> {
+        match *self {
+            SeamKind::Taped { width, stiffness_factor }
+                if !(width.is_finite() && width >= 0.0 && stiffness_factor.is_finite() && stiffness_factor > 0.0) =>
+            {
+                Some("a tape needs a non-negative width and a positive stiffness factor")
+            }
+            _ => None,
+        }
+    }
 }
 
 /// A built seam: its spans, slave tributary lengths and the range of its ties.

@@ -414,7 +414,6 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
         monitors.push(Monitor { name: m.name.clone(), node, dofs: m.dofs.clone() });
     }
 
-    let mut frames0 = frames0;
     let (mut ties, mut seams) = crate::garment::build_scene_seams(&scene.seams, &loc, &node_sets, &loads, &x0, &mut frames0)?;
     let mut warnings = Vec::new();
     let mut layout = None;
