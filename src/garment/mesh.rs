@@ -170,7 +170,60 @@ fn cdt_split(o: &[[f64; 2]], h: f64) -> Result<PatternMesh, String> {
             out
         })
         .collect();
-    Ok(PatternMesh { uv, quads, segment_rows, method: "cdt-split" })
+    let mut mesh = PatternMesh { uv, quads, segment_rows, method: "cdt-split" };
+    smooth(&mut mesh, 10);
+    Ok(mesh)
+}
+
+/// Whether every corner of every quad turns counter-clockwise (convex, valid quads).
+fn all_convex(uv: &[[f64; 2]], quads: &[[usize; 4]]) -> bool {
+    quads.iter().all(|q| {
+        (0..4).all(|k| {
+            let (a, b, c) = (uv[q[k]], uv[q[(k + 1) % 4]], uv[q[(k + 2) % 4]]);
+            (b[0] - a[0]) * (c[1] - b[1]) - (b[1] - a[1]) * (c[0] - b[0]) > 0.0
+        })
+    })
+}
+
+/// Laplacian smoothing of the interior nodes (each moved to the mean of its quad-edge
+/// neighbours; Field 1988), `passes` times; a pass that would make any quad non-convex is
+/// undone and smoothing stops.
+fn smooth(mesh: &mut PatternMesh, passes: usize) {
+    let n = mesh.uv.len();
+    let mut boundary = vec![false; n];
+    for row in &mesh.segment_rows {
+        for &v in row {
+            boundary[v] = true;
+        }
+    }
+    let mut nbrs: Vec<Vec<usize>> = vec![Vec::new(); n];
+    for q in &mesh.quads {
+        for k in 0..4 {
+            let (a, b) = (q[k], q[(k + 1) % 4]);
+            nbrs[a].push(b);
+            nbrs[b].push(a);
+        }
+    }
+    for l in nbrs.iter_mut() {
+        l.sort_unstable();
+        l.dedup();
+    }
+    for _ in 0..passes {
+        let next: Vec<[f64; 2]> = (0..n)
+            .map(|v| {
+                if boundary[v] || nbrs[v].is_empty() {
+                    return mesh.uv[v];
+                }
+                let k = nbrs[v].len() as f64;
+                let s = nbrs[v].iter().fold([0.0, 0.0], |s, &w| [s[0] + mesh.uv[w][0], s[1] + mesh.uv[w][1]]);
+                [s[0] / k, s[1] / k]
+            })
+            .collect();
+        if !all_convex(&next, &mesh.quads) {
+            break;
+        }
+        mesh.uv = next;
+    }
 }
 
 fn polygon_area(o: &[[f64; 2]]) -> f64 {
@@ -189,6 +242,19 @@ mod tests {
         let area: f64 = m.quads.iter().map(|q| super::super::graph::signed_area(&q.map(|i| m.uv[i]))).sum();
         assert!((area - 3.0).abs() < 1e-9, "{area}");
         assert!(m.quads.iter().all(|q| super::super::graph::signed_area(&q.map(|i| m.uv[i])) > 0.0));
+        let quality = |m: &PatternMesh| {
+            let sm = crate::mesh::ShellMesh {
+                nodes: m.uv.iter().map(|p| nalgebra::Vector3::new(p[0], p[1], 0.0)).collect(),
+                directors: vec![nalgebra::Vector3::z(); m.uv.len()],
+                quads: m.quads.clone(),
+                edges: Default::default(),
+            };
+            sm.quality()
+        };
+        let q = quality(&m);
+        println!("{} quads, {q:?}", m.quads.len());
+        // Measured 28.0°..141.6°, aspect 3.49 (without smoothing: 28.1°..157.1°, 4.93).
+        assert!(q.min_angle_deg > 25.0 && q.max_angle_deg < 145.0 && q.max_aspect_ratio < 4.0, "{q:?}");
         let row = &m.segment_rows[0];
         assert_eq!(m.uv[row[0]], [0.0, 0.0]);
         assert_eq!(m.uv[*row.last().unwrap()], [2.0, 0.0]);
