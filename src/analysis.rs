@@ -63,6 +63,8 @@ pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &m
     }
     let export = ExportOptions { binary: scene.output.binary };
     let mut pvd_entries: Vec<(f64, String)> = Vec::new();
+    let mut garment_entries: Vec<(f64, String)> = Vec::new();
+    let garment_export = !built.seams.is_empty() || built.garment.is_some();
     let mut export_s = 0.0;
     let mut io_error: Option<String> = None;
     let mut mode_files: Vec<String> = Vec::new();
@@ -72,7 +74,7 @@ pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &m
     let result = solver.run(
         steps,
         &mut state,
-        &mut |report, st, _| {
+        &mut |report, st, solved| {
             for (h, m) in summary.monitors.iter_mut().zip(&built.monitors) {
                 h.record(m, model, st);
             }
@@ -84,6 +86,16 @@ pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &m
                 match write_state_vtu(&dir.join(&name), model, st, &export) {
                     Ok(()) => pvd_entries.push((report.time, name)),
                     Err(e) => io_error = io_error.take().or(Some(e.to_string())),
+                }
+                if garment_export {
+                    let gname = format!("{}_garment_{:04}.vtu", scene.name, garment_entries.len() + 1);
+                    let mut f_ext = vec![0.0; solved.internal_force().len()];
+                    model.external_force(st, &report.scales, &mut f_ext);
+                    let forces = Some((solved.internal_force(), f_ext.as_slice()));
+                    match crate::garment::export::write_garment_vtu(&dir.join(&gname), model, Some(st), built.garment.as_ref(), &built.seams, forces, export.binary) {
+                        Ok(()) => garment_entries.push((report.time, gname)),
+                        Err(e) => io_error = io_error.take().or(Some(e.to_string())),
+                    }
                 }
                 export_s += t.elapsed().as_secs_f64();
             }
@@ -123,6 +135,16 @@ pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &m
         summary.files = pvd_entries.iter().map(|e| e.1.clone()).collect();
         summary.files.append(&mut mode_files);
         summary.files.push(pvd_name);
+        if garment_export {
+            let flat = format!("{}_pattern.vtu", scene.name);
+            crate::garment::export::write_garment_vtu(&dir.join(&flat), model, None, built.garment.as_ref(), &built.seams, None, export.binary)
+                .map_err(|e| RunError::Io(e.to_string()))?;
+            let gpvd = format!("{}_garment.pvd", scene.name);
+            pvd::write_pvd(&dir.join(&gpvd), &garment_entries).map_err(|e| RunError::Io(e.to_string()))?;
+            summary.files.extend(garment_entries.iter().map(|e| e.1.clone()));
+            summary.files.push(flat);
+            summary.files.push(gpvd);
+        }
         if let Some(name) = write_monitor_plot(dir, scene, built, &summary).map_err(RunError::Io)? {
             summary.files.push(name);
         }

@@ -43,6 +43,12 @@ pub struct Scene {
     /// Geometric imperfection seeded into the reference geometry before the solve.
     #[serde(default)]
     pub imperfection: Option<ImperfectionSpec>,
+    /// Seams: master–slave ties between node rows of the parts.
+    #[serde(default)]
+    pub seams: Vec<SeamSpec>,
+    /// A garment (panels, plies, seams, stitch lines) whose plies become further parts.
+    #[serde(default)]
+    pub garment: Option<crate::garment::GarmentSpec>,
 }
 
 /// Geometric imperfections (added to the reference mid-surface and directors).
@@ -67,6 +73,25 @@ pub struct ModeAmplitude {
     pub mode: usize,
     /// Largest translation of the mode's contribution.
     pub amplitude: f64,
+}
+
+
+/// A seam between two ordered node sets (e.g. `Edge` selectors), running the same way.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SeamSpec {
+    /// Seam name.
+    pub name: String,
+    /// Master node row (a node set).
+    pub master: String,
+    /// Slave node row (a node set); make the finer row the slave.
+    pub slave: String,
+    /// Plain (hinge), Welded or Taped.
+    pub kind: crate::garment::SeamKind,
+    /// A `Closure` load pattern whose scale drives the initial gap between the rows to zero
+    /// (virtual sewing); without it the initial gap is kept.
+    #[serde(default)]
+    pub closing: Option<String>,
 }
 
 /// A material model and its constants.
@@ -112,6 +137,9 @@ pub struct PartSpec {
     /// Lamina e1 direction (material grain); default the element's ξ direction.
     #[serde(default)]
     pub grain: Option<[f64; 3]>,
+    /// Rigid translation applied to the generated mesh.
+    #[serde(default)]
+    pub offset: Option<[f64; 3]>,
     /// Mass per reference area for `Dynamic` steps; 0 (default): the areal density of a
     /// Gravity load on this part, else massless.
     #[serde(default)]
@@ -218,6 +246,8 @@ pub enum LoadSpec {
     Gravity { part: String, areal_density: f64, g: [f64; 3] },
     /// Prescribed translation of the set's nodes.
     Displacement { set: String, dof: Dof, value: f64 },
+    /// No force: its scale (0 → 1) closes the gaps of the seams that name it (sewing).
+    Closure,
 }
 
 /// A solution step: load scales ramped linearly over its increments.
