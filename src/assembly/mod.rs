@@ -9,7 +9,7 @@ use std::time::Instant;
 use rayon::prelude::*;
 
 use crate::element::{ElementFailure, ElementGeometry, ElementOutput, SectionRule, ELEMENT_DOFS, NODE_DOFS};
-use crate::model::{Model, State, FIXED};
+use crate::model::{Model, State, FIXED, UNTIED};
 
 const NO_SLOT: u32 = u32::MAX;
 const CHUNK: usize = 2048;
@@ -44,6 +44,23 @@ pub struct Assembler {
     rules: Vec<Result<SectionRule, ElementFailure>>,
     /// Reference geometry of each element (built once; a degenerate element keeps its failure).
     geometry: Vec<Result<ElementGeometry, ElementFailure>>,
+    /// Entries of elements with tied DOFs that go through the constraint weights:
+    /// (local entry i·20+j, slot, w_i w_j), the element's part of Tᵀ K T. Empty for
+    /// elements without tied DOFs (their entries all take the direct path).
+    tied: Vec<Vec<(u16, u32, f64)>>,
+}
+
+/// Equations and weights a local element DOF maps to: its own equation, or a tied slave's
+/// free masters (master–slave transformation).
+fn expanded(model: &Model, g: usize) -> Vec<(usize, f64)> {
+    let dofs = &model.dofs;
+    if dofs.eq[g] != FIXED {
+        return vec![(dofs.eq[g], 1.0)];
+    }
+    match dofs.tie_of[g] {
+        UNTIED => Vec::new(),
+        t => dofs.tie_eqs[t as usize].clone(),
+    }
 }
 
 /// What one assembly produced besides the matrix values.
@@ -86,6 +103,24 @@ impl Assembler {
                 }
             }
         }
+        // Couplings through tied DOFs: every pair of expanded equations of an element.
+        let has_ties = !model.dofs.ties.is_empty();
+        let is_tied = |el: &crate::model::ElementDef| {
+            has_ties && el.nodes.iter().any(|&n| (0..NODE_DOFS).any(|k| model.dofs.tie_of[NODE_DOFS * n + k] != UNTIED))
+        };
+        for el in model.elements.iter().filter(|el| is_tied(el)) {
+            let mut all: Vec<usize> = (0..ELEMENT_DOFS)
+                .flat_map(|i| expanded(model, NODE_DOFS * el.nodes[i / NODE_DOFS] + i % NODE_DOFS))
+                .map(|(e, _)| e)
+                .collect();
+            all.sort_unstable();
+            all.dedup();
+            for (a, &r) in all.iter().enumerate() {
+                for &c in &all[a..] {
+                    cols[c].push(r);
+                }
+            }
+        }
         let mut col_ptr = Vec::with_capacity(cols.len() + 1);
         let mut row_idx = Vec::new();
         col_ptr.push(0);
@@ -125,7 +160,41 @@ impl Assembler {
                 Err(f) => Err(f.clone()),
             })
             .collect();
-        Self { pattern, slots, rules, geometry }
+        let slot_of = |r: usize, c: usize| -> Option<u32> {
+            let rows = &pattern.row_idx[pattern.col_ptr[c]..pattern.col_ptr[c + 1]];
+            rows.binary_search(&r).ok().map(|p| (pattern.col_ptr[c] + p) as u32)
+        };
+        let tied = model
+            .elements
+            .iter()
+            .map(|el| {
+                if !is_tied(el) {
+                    return Vec::new();
+                }
+                let globals: [usize; ELEMENT_DOFS] = std::array::from_fn(|i| NODE_DOFS * el.nodes[i / NODE_DOFS] + i % NODE_DOFS);
+                let exp: Vec<Vec<(usize, f64)>> = globals.iter().map(|&g| expanded(model, g)).collect();
+                let mut list = Vec::new();
+                for i in 0..ELEMENT_DOFS {
+                    for j in 0..ELEMENT_DOFS {
+                        let direct = model.dofs.tie_of[globals[i]] == UNTIED && model.dofs.tie_of[globals[j]] == UNTIED;
+                        if direct {
+                            continue;
+                        }
+                        for &(r, wr) in &exp[i] {
+                            for &(c, wc) in &exp[j] {
+                                if r <= c
+                                    && let Some(s) = slot_of(r, c)
+                                {
+                                    list.push(((i * ELEMENT_DOFS + j) as u16, s, wr * wc));
+                                }
+                            }
+                        }
+                    }
+                }
+                list
+            })
+            .collect();
+        Self { pattern, slots, rules, geometry, tied }
     }
 
     /// Number of stored entries of the upper triangle.
@@ -181,10 +250,15 @@ impl Assembler {
                             }
                         }
                     }
+                    for &(ij, s, w) in &self.tied[e] {
+                        let ij = ij as usize;
+                        v[s as usize] += w * k[(ij / ELEMENT_DOFS, ij % ELEMENT_DOFS)];
+                    }
                 }
             }
             start = end;
         }
+        model.dofs.fold(f_int);
         Ok(AssemblyInfo { energy, seconds: t0.elapsed().as_secs_f64() })
     }
 }
