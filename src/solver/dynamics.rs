@@ -121,6 +121,17 @@ pub fn check_settings(ds: &DynamicSettings) -> Option<(&'static str, &'static st
     }
 }
 
+/// What to add to a not-at-rest message when rest criteria were met at unstable equilibria.
+fn unstable_note(unstable_rests: usize) -> String {
+    if unstable_rests == 0 {
+        String::new()
+    } else {
+        format!(
+            "; {unstable_rests} time steps met the rest criteria at an unstable equilibrium (static tangent not positive definite: a mechanism or a saddle); `require_stable: false` accepts such a state"
+        )
+    }
+}
+
 /// Time-integration data of one accepted time step, reported with the increment.
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct DynamicInfo {
@@ -420,6 +431,7 @@ impl<'m> Solver<'m> {
         let mut rejected = 0usize;
         let mut iterations = 0usize;
         let mut unstable_rests = 0usize;
+        let mut indefinite = false;
         for k in 1..=ds.max_steps {
             let scales = at(t + dt);
             let mut report_progress = |it: usize, res: f64| {
@@ -458,7 +470,7 @@ impl<'m> Solver<'m> {
                         iterations,
                         residuals,
                         cutbacks: rejected,
-                        indefinite_tangent: false,
+                        indefinite_tangent: indefinite,
                         energy,
                         dynamics: Some(DynamicInfo { time: t, dt, kinetic_energy: ke, static_residual, at_rest, rejected, unstable_rests }),
                         ..Default::default()
@@ -469,6 +481,7 @@ impl<'m> Solver<'m> {
                     }
                     iterations = 0;
                     rejected = 0;
+                    indefinite = false;
                     prev = Kinematics { state: state.clone(), v, w };
                     if its <= 6 {
                         dt = (dt * ds.grow).min(ds.dt_max);
@@ -481,15 +494,16 @@ impl<'m> Solver<'m> {
                             vec![static_residual],
                             None,
                             format!(
-                                "not at rest after the maximum time {:.3e} (kinetic energy {ke:.3e} of reference {e_ref:.3e}, static residual {static_residual:.3e}); raise max_time or add mass_damping",
-                                ds.max_time
+                                "not at rest after the maximum time {:.3e} (kinetic energy {ke:.3e} of reference {e_ref:.3e}, static residual {static_residual:.3e}); raise max_time or add mass_damping{}",
+                                ds.max_time,
+                                unstable_note(unstable_rests)
                             ),
                             t,
                         ));
                     }
                 }
-                TimeStep::Indefinite { iteration, residuals } | TimeStep::Failed { iteration, residuals, .. } if dt * 0.25 >= ds.dt_min => {
-                    let _ = (iteration, residuals);
+                TimeStep::Indefinite { .. } | TimeStep::Failed { .. } if dt * 0.25 >= ds.dt_min => {
+                    indefinite |= matches!(outcome, TimeStep::Indefinite { .. });
                     *state = prev.state.clone();
                     rejected += 1;
                     dt *= 0.25;
@@ -515,7 +529,7 @@ impl<'m> Solver<'m> {
             ds.max_steps,
             vec![],
             None,
-            format!("not at rest after max_steps = {} time steps (t = {t:.4e}); raise max_steps, dt_max or mass_damping", ds.max_steps),
+            format!("not at rest after max_steps = {} time steps (t = {t:.4e}); raise max_steps, dt_max or mass_damping{}", ds.max_steps, unstable_note(unstable_rests)),
             t,
         ))
     }
