@@ -249,3 +249,55 @@ fn nodal_force_hook_adds_springs_to_residual_and_tangent() {
     assert!((spring - root - 4.0).abs() < 1e-6 * 4.0, "springs {spring} − root {root} vs 4");
     assert!(spring > 0.1 && spring < 4.0);
 }
+
+/// The integrator itself: an unsupported plate under gravity falls freely. Backward Euler
+/// with fixed Δt (grow = 1) gives v_n = −g t_n and u_n = −½ g t_n (t_n + Δt) exactly (the
+/// discrete solution of ü = −g), and with mass-proportional damping α_M,
+/// v_{n+1} = (v_n − g Δt)/(1 + α_M Δt): every node to 1e-9 relative. The step ends at
+/// max_time, not at rest, and says so.
+#[test]
+fn free_fall_follows_the_discrete_backward_euler_solution() {
+    use plyshell::solver::DynamicSettings;
+    let text = r#"Scene(
+        name: "free_fall",
+        materials: {"m": StVenantKirchhoff(young: 1.0e6, poisson: 0.3)},
+        parts: [(name: "plate", mesh: Rectangle(lx: 1.0, ly: 1.0, nx: 4, ny: 4), material: "m", thickness: 0.01)],
+        loads: {"g": Gravity(part: "plate", areal_density: 2.0, g: (0.0, 0.0, -9.81))},
+        steps: [(name: "fall", increments: 1, scale: {"g": 1.0})],
+    )"#;
+    let sc = scene::parse("fall.ron", text).expect("scene");
+    let built = scene::build(&sc, "fall.ron", text).expect("build");
+    let (g, dt) = (9.81, 0.01);
+    for alpha in [0.0, 3.0] {
+        let mut plan = built.steps.clone();
+        plan[0].kind = StepKind::Dynamic(DynamicSettings { dt, grow: 1.0, max_time: 0.2 - 0.5 * dt, mass_damping: alpha, ..Default::default() });
+        let mut solver = Solver::new(&built.model, sc.solver.clone()).expect("solver");
+        let mut state = built.model.initial_state();
+        let (mut v, mut u, mut worst, mut steps) = (0.0f64, 0.0f64, 0.0f64, 0);
+        let out = solver.run(
+            &plan,
+            &mut state,
+            &mut |r, st, _| {
+                let d = r.dynamics.as_ref().expect("dynamic");
+                assert!((d.dt - dt).abs() < 1e-15);
+                v = (v - g * dt) / (1.0 + alpha * dt);
+                u += dt * v;
+                for n in 0..st.u.len() {
+                    let e = (st.u[n].z - u).abs() / u.abs();
+                    worst = worst.max(e + st.u[n].x.abs() + st.u[n].y.abs());
+                }
+                steps += 1;
+            },
+            &mut |_| {},
+        );
+        let msg = out.expect_err("a falling plate never comes to rest").to_string();
+        println!("free fall α_M = {alpha}: {steps} steps, u = {u:.6} m, largest relative deviation {worst:.1e}; {msg}");
+        assert!(msg.contains("not at rest"), "{msg}");
+        assert_eq!(steps, 20);
+        assert!(worst < 1e-9, "deviation {worst}");
+        if alpha == 0.0 {
+            let t = 20.0 * dt;
+            assert!((u + 0.5 * g * t * (t + dt)).abs() < 1e-12);
+        }
+    }
+}
