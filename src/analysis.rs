@@ -79,7 +79,7 @@ pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &m
                 h.record(m, model, st);
             }
             summary.newton_iterations += report.iterations;
-            let last_of_step = report.increment == steps[report.step].increments || report.dynamics.as_ref().is_some_and(|d| d.at_rest);
+            let last_of_step = report.increment == steps[report.step].increments || report.dynamics.as_ref().is_some_and(|d| d.end_of_step);
             if let (Some(dir), true) = (&options.out_dir, scene.output.vtu && (report.increment % every == 0 || last_of_step)) {
                 let t = Instant::now();
                 let name = format!("{}_{:04}.vtu", scene.name, pvd_entries.len() + 1);

@@ -15,6 +15,9 @@
 //! unstable equilibrium (a saddle, e.g. a flat sheet past its wrinkling threshold) is left
 //! along its unstable mode instead of being reported as rest.
 //!
+//! For transient analysis the generalized-α scheme (Chung & Hulbert 1993) is available with
+//! a chosen high-frequency dissipation ρ∞, and `duration` ends the step at a given time.
+//!
 //! Mass is lumped (row sums of the consistent mass, i.e. the nodal area weights ∫N_a dA
 //! times the part's areal density ρ_A). Director tilts carry the fibre's rotary inertia
 //! ρ_A h²/12 per area (a fibre of length h through a lamina of density ρ = ρ_A/h), scaled by
@@ -67,6 +70,85 @@ pub struct DynamicSettings {
     /// Rest also requires a stable equilibrium: the static tangent K, shifted by 1e-10·diag|K|
     /// against round-off, factors as LLᵀ.
     pub require_stable: bool,
+    /// Time integration scheme.
+    pub scheme: TimeScheme,
+    /// Transient analysis: when > 0 the step ends (successfully) at this time instead of
+    /// waiting for rest.
+    pub duration: f64,
+}
+
+/// Implicit time integration schemes.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub enum TimeScheme {
+    /// Backward Euler: first order, L-stable, damps every mode (pseudo-transient to rest).
+    #[default]
+    BackwardEuler,
+    /// Generalized-α (Chung & Hulbert, J. Appl. Mech. 60, 1993), second order, with the
+    /// spectral radius ρ∞ ∈ [0, 1] at infinite frequency (1: no numerical dissipation). The
+    /// internal force is averaged, (1−α_f) f(u_{n+1}) + α_f f(u_n) (Kuhl & Crisfield 1999).
+    GeneralizedAlpha { rho_inf: f64 },
+}
+
+/// Per-step coefficients of a scheme: inertia at n+1−α_m, forces at n+1−α_f, Newmark β, γ.
+#[derive(Clone, Copy, Debug)]
+struct Coefficients {
+    /// None: backward Euler.
+    alpha: Option<(f64, f64, f64, f64)>,
+    dt: f64,
+    damping: f64,
+}
+
+impl Coefficients {
+    fn new(scheme: &TimeScheme, dt: f64, damping: f64) -> Self {
+        let alpha = match *scheme {
+            TimeScheme::BackwardEuler => None,
+            TimeScheme::GeneralizedAlpha { rho_inf } => {
+                let am = (2.0 * rho_inf - 1.0) / (rho_inf + 1.0);
+                let af = rho_inf / (rho_inf + 1.0);
+                let gamma = 0.5 - am + af;
+                let beta = 0.25 * (1.0 - am + af).powi(2);
+                Some((am, af, beta, gamma))
+            }
+        };
+        Self { alpha, dt, damping }
+    }
+
+    /// Acceleration and velocity at n+1 of a quantity with increment `dx` over the step,
+    /// previous velocity `v` and acceleration `a`.
+    fn rates(&self, dx: Vector3<f64>, v: Vector3<f64>, a: Vector3<f64>) -> (Vector3<f64>, Vector3<f64>) {
+        let dt = self.dt;
+        match self.alpha {
+            None => ((dx - v * dt) / (dt * dt), dx / dt),
+            Some((_, _, beta, gamma)) => {
+                let a1 = (dx - v * dt) / (beta * dt * dt) - a * (0.5 / beta - 1.0);
+                (a1, v + (a * (1.0 - gamma) + a1 * gamma) * dt)
+            }
+        }
+    }
+
+    /// Inertia and damping force per unit mass in the residual (scaled by 1/(1−α_f) so the
+    /// internal force at n+1 enters with weight 1).
+    fn inertia(&self, dx: Vector3<f64>, v: Vector3<f64>, a: Vector3<f64>) -> Vector3<f64> {
+        let (a1, v1) = self.rates(dx, v, a);
+        match self.alpha {
+            None => a1 + v1 * self.damping,
+            Some((am, af, _, _)) => (a1 * (1.0 - am) + a * am + (v1 * (1.0 - af) + v * af) * self.damping) / (1.0 - af),
+        }
+    }
+
+    /// Mass factor of the effective tangent K + c M.
+    fn tangent(&self) -> f64 {
+        let dt = self.dt;
+        match self.alpha {
+            None => 1.0 / (dt * dt) + self.damping / dt,
+            Some((am, af, beta, gamma)) => ((1.0 - am) / (beta * dt * dt) + self.damping * (1.0 - af) * gamma / (beta * dt)) / (1.0 - af),
+        }
+    }
+
+    /// Weight of the previous step's static residual: α_f/(1−α_f).
+    fn previous_force_weight(&self) -> f64 {
+        self.alpha.map_or(0.0, |(_, af, _, _)| af / (1.0 - af))
+    }
 }
 
 impl Default for DynamicSettings {
@@ -85,6 +167,8 @@ impl Default for DynamicSettings {
             grow: 1.5,
             max_iterations: 12,
             require_stable: true,
+            scheme: TimeScheme::BackwardEuler,
+            duration: 0.0,
         }
     }
 }
@@ -116,8 +200,23 @@ pub fn check_settings(ds: &DynamicSettings) -> Option<(&'static str, &'static st
         Some(("grow", "expected a growth factor of at least 1"))
     } else if ds.max_iterations == 0 {
         Some(("max_iterations", "expected at least one iteration"))
+    } else if matches!(ds.scheme, TimeScheme::GeneralizedAlpha { rho_inf } if !(0.0..=1.0).contains(&rho_inf)) {
+        Some(("scheme", "expected a spectral radius rho_inf in [0, 1]"))
+    } else if !(ds.duration.is_finite() && ds.duration >= 0.0) {
+        Some(("duration", "expected a non-negative duration (0: run to rest)"))
     } else {
         None
+    }
+}
+
+/// What to add to a not-at-rest message when rest criteria were met at unstable equilibria.
+fn unstable_note(unstable_rests: usize) -> String {
+    if unstable_rests == 0 {
+        String::new()
+    } else {
+        format!(
+            "; {unstable_rests} time steps met the rest criteria at an unstable equilibrium (static tangent not positive definite: a mechanism or a saddle); `require_stable: false` accepts such a state"
+        )
     }
 }
 
@@ -132,8 +231,10 @@ pub struct DynamicInfo {
     pub kinetic_energy: f64,
     /// Relative static residual ‖f_int − f_ext‖ / reference.
     pub static_residual: f64,
-    /// Both rest criteria hold: the last report of the step.
+    /// Both rest criteria hold.
     pub at_rest: bool,
+    /// The last report of the step (at rest, or the `duration` of a transient step reached).
+    pub end_of_step: bool,
     /// Time steps rejected (Newton failure or indefinite effective tangent) since the
     /// previous report.
     pub rejected: usize,
@@ -191,31 +292,41 @@ impl LumpedMass {
 #[derive(Clone)]
 struct Kinematics {
     state: State,
+    /// Translational velocities and accelerations.
     v: Vec<Vector3<f64>>,
+    a: Vec<Vector3<f64>>,
+    /// Director rates and accelerations.
     w: Vec<Vector3<f64>>,
+    wa: Vec<Vector3<f64>>,
+    /// Static residual f_int − f_ext on the free DOFs (generalized-α force average).
+    r: Vec<f64>,
 }
 
 /// Outcome of one time step's Newton solve.
 enum TimeStep {
-    Converged { iterations: usize, residuals: Vec<f64>, static_residual: f64, energy: f64 },
+    Converged { iterations: usize, residuals: Vec<f64>, static_residual: f64, energy: f64, static_r: Vec<f64> },
     /// The effective tangent was not positive definite: Δt too large for this state.
     Indefinite { iteration: usize, residuals: Vec<f64> },
     Failed { iteration: usize, residuals: Vec<f64>, worst_element: Option<usize>, cause: String },
 }
 
 impl<'m> Solver<'m> {
-    /// Adds the backward-Euler inertia and damping forces to the free residual `r` and the
-    /// mass term (1/Δt² + α_M/Δt) M to the diagonal of the assembled tangent; returns ‖f_inertia‖.
-    fn add_inertia(&mut self, state: &State, prev: &Kinematics, mass: &LumpedMass, dt: f64, alpha: f64, r: &mut [f64]) -> f64 {
+    /// Adds the scheme's inertia and damping forces (and, for generalized-α, the weighted
+    /// static residual of the previous step) to the free residual `r`, and c·M to the
+    /// diagonal of the assembled tangent; returns ‖f_inertia‖.
+    fn add_inertia(&mut self, state: &State, prev: &Kinematics, mass: &LumpedMass, co: &Coefficients, r: &mut [f64]) -> f64 {
         let eq = &self.model.dofs.eq;
         let col_ptr = &self.assembler.pattern.col_ptr;
-        let c = 1.0 / (dt * dt) + alpha / dt;
+        let c = co.tangent();
+        let wp = co.previous_force_weight();
+        if wp != 0.0 {
+            r.iter_mut().zip(&prev.r).for_each(|(x, p)| *x += wp * p);
+        }
         let mut norm2 = 0.0;
         for n in 0..self.model.n_nodes() {
             let base = NODE_DOFS * n;
             let m = mass.translational[n];
-            let du = state.u[n] - prev.state.u[n];
-            let a = (du - prev.v[n] * dt) / (dt * dt) + du * (alpha / dt);
+            let a = co.inertia(state.u[n] - prev.state.u[n], prev.v[n], prev.a[n]);
             for k in 0..3 {
                 let e = eq[base + k];
                 if e != FIXED {
@@ -227,8 +338,7 @@ impl<'m> Solver<'m> {
             }
             let j = mass.rotary[n];
             let fr = &state.frames[n];
-            let dd = fr.d - prev.state.frames[n].d;
-            let ad = (dd - prev.w[n] * dt) / (dt * dt) + dd * (alpha / dt);
+            let ad = co.inertia(fr.d - prev.state.frames[n].d, prev.w[n], prev.wa[n]);
             for (k, t) in [fr.t1, fr.t2].iter().enumerate() {
                 let e = eq[base + 3 + k];
                 if e != FIXED {
@@ -260,6 +370,8 @@ impl<'m> Solver<'m> {
         let mut du = vec![0.0; n];
         let mut residuals = Vec::new();
         let mut energy0: Option<f64> = None;
+        let mut static_r = vec![0.0; n];
+        let co = Coefficients::new(&ds.scheme, dt, ds.mass_damping);
         let tol = self.settings.residual_tol;
         self.model.apply_prescribed(state, scales);
         let mut energy = match self.assemble(state, scales, true) {
@@ -270,7 +382,8 @@ impl<'m> Solver<'m> {
         };
         for it in 0..=ds.max_iterations {
             let (static_rel, reference) = self.residual(&mut r);
-            let inertia = self.add_inertia(state, prev, mass, dt, ds.mass_damping, &mut r);
+            static_r.copy_from_slice(&r);
+            let inertia = self.add_inertia(state, prev, mass, &co, &mut r);
             let rel = r.iter().map(|v| v * v).sum::<f64>().sqrt() / reference.max(inertia);
             residuals.push(rel);
             progress(it, rel);
@@ -282,7 +395,7 @@ impl<'m> Solver<'m> {
                 let de = du.iter().zip(&r).map(|(a, b)| a * b).sum::<f64>().abs();
                 let energy_ok = de <= self.settings.energy_tol * energy0.unwrap_or(1.0);
                 if (rel <= tol && energy_ok) || rel <= 1e-3 * tol || (energy_ok && rel <= 1e3 * tol) {
-                    return TimeStep::Converged { iterations: it, residuals, static_residual: static_rel, energy };
+                    return TimeStep::Converged { iterations: it, residuals, static_residual: static_rel, energy, static_r };
                 }
             }
             if it == ds.max_iterations {
@@ -414,12 +527,44 @@ impl<'m> Solver<'m> {
             start.iter().zip(&step.target_scales).map(|(a, b)| a + tau * (b - a)).collect()
         };
         let nn = model.n_nodes();
-        let mut prev = Kinematics { state: state.clone(), v: vec![Vector3::zeros(); nn], w: vec![Vector3::zeros(); nn] };
+        let zeros = vec![Vector3::zeros(); nn];
+        let mut prev = Kinematics { state: state.clone(), v: zeros.clone(), a: zeros.clone(), w: zeros.clone(), wa: zeros, r: vec![0.0; model.dofs.n_free] };
+        if matches!(ds.scheme, TimeScheme::GeneralizedAlpha { .. }) {
+            // The force average needs the static residual r₀ of the initial state, and the
+            // initial acceleration follows from the equation of motion, M a₀ = −r₀ (loads at
+            // t = 0⁺, the state at rest).
+            let first = at(0.0);
+            if let Err(f) = self.assemble(state, &first, false) {
+                return Err(error(0, vec![], Some(f.element), format!("element {} failed: {}", f.element, f.failure), 0.0));
+            }
+            self.residual(&mut prev.r);
+            let eq = &model.dofs.eq;
+            for n in 0..nn {
+                let fr = &state.frames[n];
+                let mut torque = Vector3::zeros();
+                for k in 0..5 {
+                    let e = eq[NODE_DOFS * n + k];
+                    if e == FIXED {
+                        continue;
+                    }
+                    match k {
+                        0..=2 if mass.translational[n] > 0.0 => prev.a[n][k] = -prev.r[e] / mass.translational[n],
+                        3 => torque += fr.t1 * prev.r[e],
+                        4 => torque += fr.t2 * prev.r[e],
+                        _ => {}
+                    }
+                }
+                if mass.rotary[n] > 0.0 {
+                    prev.wa[n] = -torque / mass.rotary[n];
+                }
+            }
+        }
         let mut t = 0.0;
         let mut dt = ds.dt;
         let mut rejected = 0usize;
         let mut iterations = 0usize;
         let mut unstable_rests = 0usize;
+        let mut indefinite = false;
         for k in 1..=ds.max_steps {
             let scales = at(t + dt);
             let mut report_progress = |it: usize, res: f64| {
@@ -429,14 +574,14 @@ impl<'m> Solver<'m> {
             *state = prev.state.clone();
             let outcome = self.time_step(state, &prev, &mass, dt, ds, &scales, &mut report_progress);
             match outcome {
-                TimeStep::Converged { iterations: its, residuals, static_residual, energy } => {
+                TimeStep::Converged { iterations: its, residuals, static_residual, energy, static_r } => {
                     iterations += its;
+                    let co = Coefficients::new(&ds.scheme, dt, ds.mass_damping);
                     let mut ke = 0.0;
-                    let mut v = vec![Vector3::zeros(); nn];
-                    let mut w = vec![Vector3::zeros(); nn];
+                    let (mut v, mut a, mut w, mut wa) = (prev.v.clone(), prev.a.clone(), prev.w.clone(), prev.wa.clone());
                     for n in 0..nn {
-                        v[n] = (state.u[n] - prev.state.u[n]) / dt;
-                        w[n] = (state.frames[n].d - prev.state.frames[n].d) / dt;
+                        (a[n], v[n]) = co.rates(state.u[n] - prev.state.u[n], prev.v[n], prev.a[n]);
+                        (wa[n], w[n]) = co.rates(state.frames[n].d - prev.state.frames[n].d, prev.w[n], prev.wa[n]);
                         ke += 0.5 * (mass.translational[n] * v[n].norm_squared() + mass.rotary[n] * w[n].norm_squared());
                     }
                     let work: f64 = (0..nn).map(|n| (0..3).map(|c| self.f_ext[NODE_DOFS * n + c] * state.u[n][c]).sum::<f64>()).sum();
@@ -446,6 +591,7 @@ impl<'m> Solver<'m> {
                     // A saddle (e.g. a flat sheet past its wrinkling threshold) is no rest state:
                     // integration goes on and the unstable mode grows from round-off.
                     let at_rest = still && (!ds.require_stable || self.stable(state, &scales));
+                    let end_of_step = at_rest || (ds.duration > 0.0 && t >= ds.duration * (1.0 - 1e-12));
                     if still && !at_rest {
                         unstable_rests += 1;
                     }
@@ -453,27 +599,31 @@ impl<'m> Solver<'m> {
                         step: si,
                         step_name: step.name.clone(),
                         increment: k,
-                        time: si as f64 + if at_rest { 1.0 } else { (t / ds.max_time).min(0.999_999) },
+                        time: si as f64 + if end_of_step { 1.0 } else { (t / ds.max_time).min(0.999_999) },
                         scales: scales.clone(),
                         iterations,
                         residuals,
                         cutbacks: rejected,
-                        indefinite_tangent: false,
+                        indefinite_tangent: indefinite,
                         energy,
-                        dynamics: Some(DynamicInfo { time: t, dt, kinetic_energy: ke, static_residual, at_rest, rejected, unstable_rests }),
+                        dynamics: Some(DynamicInfo { time: t, dt, kinetic_energy: ke, static_residual, at_rest, end_of_step, rejected, unstable_rests }),
                         ..Default::default()
                     };
                     on_increment(&report, state, self);
-                    if at_rest {
+                    if end_of_step {
                         return Ok(());
                     }
                     iterations = 0;
                     rejected = 0;
-                    prev = Kinematics { state: state.clone(), v, w };
+                    indefinite = false;
+                    prev = Kinematics { state: state.clone(), v, a, w, wa, r: static_r };
                     if its <= 6 {
                         dt = (dt * ds.grow).min(ds.dt_max);
                     } else if its > 9 {
                         dt *= 0.7;
+                    }
+                    if ds.duration > 0.0 {
+                        dt = dt.min(ds.duration - t).max(1e-12 * ds.duration);
                     }
                     if t >= ds.max_time {
                         return Err(error(
@@ -481,15 +631,16 @@ impl<'m> Solver<'m> {
                             vec![static_residual],
                             None,
                             format!(
-                                "not at rest after the maximum time {:.3e} (kinetic energy {ke:.3e} of reference {e_ref:.3e}, static residual {static_residual:.3e}); raise max_time or add mass_damping",
-                                ds.max_time
+                                "not at rest after the maximum time {:.3e} (kinetic energy {ke:.3e} of reference {e_ref:.3e}, static residual {static_residual:.3e}); raise max_time or add mass_damping{}",
+                                ds.max_time,
+                                unstable_note(unstable_rests)
                             ),
                             t,
                         ));
                     }
                 }
-                TimeStep::Indefinite { iteration, residuals } | TimeStep::Failed { iteration, residuals, .. } if dt * 0.25 >= ds.dt_min => {
-                    let _ = (iteration, residuals);
+                TimeStep::Indefinite { .. } | TimeStep::Failed { .. } if dt * 0.25 >= ds.dt_min => {
+                    indefinite |= matches!(outcome, TimeStep::Indefinite { .. });
                     *state = prev.state.clone();
                     rejected += 1;
                     dt *= 0.25;
@@ -515,7 +666,7 @@ impl<'m> Solver<'m> {
             ds.max_steps,
             vec![],
             None,
-            format!("not at rest after max_steps = {} time steps (t = {t:.4e}); raise max_steps, dt_max or mass_damping", ds.max_steps),
+            format!("not at rest after max_steps = {} time steps (t = {t:.4e}); raise max_steps, dt_max or mass_damping{}", ds.max_steps, unstable_note(unstable_rests)),
             t,
         ))
     }

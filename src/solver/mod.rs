@@ -10,7 +10,7 @@ pub mod linear;
 pub mod newton;
 pub mod nodal;
 
-pub use dynamics::{DynamicInfo, DynamicSettings, LumpedMass};
+pub use dynamics::{DynamicInfo, DynamicSettings, LumpedMass, TimeScheme};
 pub use eigen::BucklingReport;
 pub use nodal::NodalForces;
 pub use newton::{IncrementReport, Progress, SolveError, Solver, StepPlan, Timings};
