@@ -43,7 +43,11 @@ pub struct RunOptions {
 /// the monitor plot into the output directory.
 pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &mut dyn FnMut(&Progress)) -> Result<Summary, RunError> {
     let t0 = Instant::now();
-    let model = &built.model;
+    let seeded = match &built.imperfection {
+        Some(imp) => Some(crate::solver::imperfection::seeded(&built.model, imp, &scene.solver).map_err(RunError::Setup)?),
+        None => None,
+    };
+    let model = seeded.as_ref().map_or(&built.model, |s| &s.0);
     let mut solver = Solver::new(model, scene.solver.clone()).map_err(RunError::Setup)?;
     let (dofs, tangent_nnz, factor_nnz) = solver.sizes();
     let mut summary = Summary {
@@ -51,6 +55,7 @@ pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &m
         sizes: Sizes { nodes: model.n_nodes(), elements: model.elements.len(), dofs, tangent_nnz, factor_nnz },
         loads: model.loads.iter().map(|l| l.name.clone()).collect(),
         monitors: built.monitors.iter().map(|m| MonitorHistory::new(m, model)).collect(),
+        imperfection_buckling: seeded.as_ref().and_then(|s| s.1.clone()),
         ..Default::default()
     };
     if let Some(dir) = &options.out_dir {
@@ -62,6 +67,7 @@ pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &m
     let garment_export = !built.seams.is_empty() || built.garment.is_some();
     let mut export_s = 0.0;
     let mut io_error: Option<String> = None;
+    let mut mode_files: Vec<String> = Vec::new();
     let mut state = model.initial_state();
     let steps = &built.steps;
     let every = scene.output.every.max(1);
@@ -93,6 +99,16 @@ pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &m
                 }
                 export_s += t.elapsed().as_secs_f64();
             }
+            if let Some(ev) = &report.stability_event {
+                summary.stability_events.push((summary.increments.len(), format!("step {} increment {}: {ev}", report.step + 1, report.increment)));
+            }
+            if let (Some(dir), Some(b)) = (&options.out_dir, &report.buckling) {
+                let name = format!("{}_buckling_step{}.vtu", scene.name, report.step + 1);
+                match crate::io::modes::write_modes_vtu(&dir.join(&name), model, st, &b.modes, scene.output.binary) {
+                    Ok(()) => mode_files.push(name),
+                    Err(e) => io_error = io_error.take().or(Some(e.to_string())),
+                }
+            }
             summary.increments.push(report.clone());
         },
         progress,
@@ -117,6 +133,7 @@ pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &m
         let pvd_name = format!("{}.pvd", scene.name);
         pvd::write_pvd(&dir.join(&pvd_name), &pvd_entries).map_err(|e| RunError::Io(e.to_string()))?;
         summary.files = pvd_entries.iter().map(|e| e.1.clone()).collect();
+        summary.files.append(&mut mode_files);
         summary.files.push(pvd_name);
         if garment_export {
             let flat = format!("{}_pattern.vtu", scene.name);

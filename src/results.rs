@@ -94,6 +94,13 @@ pub struct Summary {
     pub peak_memory_mib: Option<f64>,
     /// Files written (relative to the output directory).
     pub files: Vec<String>,
+    /// Limit points and bifurcations detected along the path: (increment index in
+    /// `increments`, description).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub stability_events: Vec<(usize, String)>,
+    /// Buckling analysis of the perfect geometry that seeded the imperfection.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub imperfection_buckling: Option<crate::solver::BucklingReport>,
 }
 
 /// Peak resident set size of this process in MiB (Linux `VmHWM`).

@@ -155,3 +155,97 @@ fn dynamic_and_damped_steps_reach_the_static_equilibrium() {
         assert!(err < 1e-6, "{name}: tip {tip:?} vs {tip_ref:?}");
     }
 }
+
+/// Step kinds in the scene: `Dynamic(())` takes every default, `StaticDamped` is a unit
+/// variant, and an invalid Dynamic setting is reported at its line and column with the field.
+#[test]
+fn step_kinds_parse_and_bad_settings_are_located() {
+    use plyshell::solver::DynamicSettings;
+    let with = |kind: &str| HANGING_CLOTH.replace("kind: Dynamic((dt: 1e-3, dt_max: 10.0, max_steps: 2000, mass_damping: 5.0))", kind);
+    let text = with("kind: Dynamic(())");
+    let sc = scene::parse("a.ron", &text).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(sc.steps[0].kind, StepKind::Dynamic(DynamicSettings::default()));
+    let text = with("kind: StaticDamped");
+    let sc = scene::parse("a.ron", &text).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(sc.steps[0].kind, StepKind::StaticDamped);
+    let text = with("kind: Dynamic((dt: 1e-3,\n dt_max: 1e-4))");
+    let sc = scene::parse("a.ron", &text).unwrap_or_else(|e| panic!("{e}"));
+    let err = scene::build(&sc, "a.ron", &text).expect_err("dt_max < dt");
+    let line = text.lines().position(|l| l.contains("dt_max: 1e-4")).expect("line") + 1;
+    assert_eq!(err.line, line, "{err}");
+    assert!(err.field.ends_with("kind.dt_max") && err.message.contains("largest time step"), "{err}");
+}
+
+/// Linear springs k on translation z of a node list, f = −k u_z: the simplest `NodalForces`.
+struct TipSprings {
+    nodes: Vec<usize>,
+    k: f64,
+}
+
+impl plyshell::solver::NodalForces for TipSprings {
+    fn add(&self, _: &plyshell::model::Model, state: &plyshell::model::State, f_ext: &mut [f64], jacobian: &mut Vec<(usize, nalgebra::Matrix3<f64>)>) {
+        for &n in &self.nodes {
+            f_ext[5 * n + 2] -= self.k * state.u[n].z;
+            let mut j = nalgebra::Matrix3::zeros();
+            j[(2, 2)] = -self.k;
+            jacobian.push((n, j));
+        }
+    }
+}
+
+/// Configuration-dependent nodal forces (the hook contact builds on) enter the residual and
+/// the tangent of every step kind. A linear cantilever (Sze §3.1 geometry, tip load P) has
+/// tip stiffness k_b = P / w₀; with springs of total stiffness k_s = k_b at the tip, linear
+/// superposition gives w = P / (k_b + k_s) = w₀/2 exactly (1e-9) for a linear step, and a
+/// Dynamic step with the full nonlinear load (P L²/EI = 4) comes to rest with the springs'
+/// k_s·w and the clamp reaction balancing the load to 1e-6 (rest residual 1e-9 of the
+/// largest generalised force, the clamp moment).
+#[test]
+fn nodal_force_hook_adds_springs_to_residual_and_tangent() {
+    use plyshell::bench::scenes;
+    let linear = scenes::END_SHEAR
+        .replace("(name: \"load\", increments: 20,", "(name: \"load\", linear: true, increments: 1,")
+        .replace("force: (0.0, 0.0, 4.0)", "force: (0.0, 0.0, 1e-4)")
+        .replace("thickness: 0.1)", "thickness: 0.1, areal_density: 1.0)");
+    let sc = scene::parse("s.ron", &linear).expect("scene");
+    let built = scene::build(&sc, "s.ron", &linear).expect("build");
+    let tip = built.node_sets["tip"].clone();
+    let solve = |springs: Option<f64>, steps: &[StepPlan]| {
+        let mut solver = Solver::new(&built.model, sc.solver.clone()).expect("solver");
+        if let Some(k) = springs {
+            solver.set_nodal_forces(Box::new(TipSprings { nodes: tip.clone(), k: k / tip.len() as f64 }));
+        }
+        let mut state = built.model.initial_state();
+        let mut its = 0;
+        solver.run(steps, &mut state, &mut |r, _, _| its += r.iterations, &mut |_| {}).unwrap_or_else(|e| panic!("{e}"));
+        (state.u[tip[0]].z, its)
+    };
+    let (w0, _) = solve(None, &built.steps);
+    let k_b = 1e-4 / w0;
+    let (w, _) = solve(Some(k_b), &built.steps);
+    println!("linear tip: free {w0:.6e}, with springs {w:.6e} (ratio {:.9})", w / w0);
+    assert!((w / w0 - 0.5).abs() < 1e-9, "{w} vs {w0}/2");
+
+    let dynamic = vec![StepPlan {
+        name: "dyn".into(),
+        increments: 1,
+        linear: false,
+        target_scales: vec![4.0e4],
+        kind: StepKind::Dynamic(plyshell::solver::DynamicSettings { dt: 0.01, dt_max: 1e3, rest_residual_tol: 1e-9, ..Default::default() }),
+    }];
+    let mut solver = Solver::new(&built.model, sc.solver.clone()).expect("solver");
+    solver.set_nodal_forces(Box::new(TipSprings { nodes: tip.clone(), k: k_b / tip.len() as f64 }));
+    let mut state = built.model.initial_state();
+    if let Err(e) = solver.run(&dynamic, &mut state, &mut |_, _, _| {}, &mut |_| {}) {
+        panic!("{e}");
+    }
+    let rel = solver.static_residual(&mut state, &[4.0e4]).expect("evaluable");
+    println!("static residual at rest {rel:e}");
+    let f_int = solver.internal_force().to_vec();
+    let spring: f64 = tip.iter().map(|&n| k_b / tip.len() as f64 * state.u[n].z).sum();
+    let root: f64 = built.node_sets["root"].iter().map(|&n| f_int[5 * n + 2]).sum();
+    println!("dynamic with springs: tip w = {:.4}, spring force {spring:.5}, root shear {root:.5}, load 4", state.u[tip[0]].z);
+    // The support reaction (f_int at the clamp, downward here) and the springs balance the load.
+    assert!((spring - root - 4.0).abs() < 1e-6 * 4.0, "springs {spring} − root {root} vs 4");
+    assert!(spring > 0.1 && spring < 4.0);
+}

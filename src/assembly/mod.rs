@@ -8,7 +8,7 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
-use crate::element::{ElementFailure, ElementOutput, ELEMENT_DOFS, NODE_DOFS};
+use crate::element::{ElementFailure, ElementGeometry, ElementOutput, SectionRule, ELEMENT_DOFS, NODE_DOFS};
 use crate::model::{Model, State, FIXED, UNTIED};
 
 const NO_SLOT: u32 = u32::MAX;
@@ -40,6 +40,10 @@ pub struct Assembler {
     /// Sparsity pattern of the free-DOF tangent (upper triangle).
     pub pattern: Pattern,
     slots: Vec<[u32; ELEMENT_DOFS * ELEMENT_DOFS]>,
+    /// Integration rule of each section (built once).
+    rules: Vec<Result<SectionRule, ElementFailure>>,
+    /// Reference geometry of each element (built once; a degenerate element keeps its failure).
+    geometry: Vec<Result<ElementGeometry, ElementFailure>>,
     /// Entries of elements with tied DOFs that go through the constraint weights:
     /// (local entry i·20+j, slot, w_i w_j), the element's part of Tᵀ K T. Empty for
     /// elements without tied DOFs (their entries all take the direct path).
@@ -182,7 +186,15 @@ impl Assembler {
                 list
             })
             .collect();
-        Self { pattern, slots, tied }
+        let rules: Vec<Result<SectionRule, ElementFailure>> = model.sections.iter().map(SectionRule::new).collect();
+        let geometry = (0..model.elements.len())
+            .into_par_iter()
+            .map(|e| match &rules[model.elements[e].section] {
+                Ok(rule) => model.element(e).geometry(rule),
+                Err(f) => Err(f.clone()),
+            })
+            .collect();
+        Self { pattern, slots, rules, geometry, tied }
     }
 
     /// Number of stored entries of the upper triangle.
@@ -216,7 +228,9 @@ impl Assembler {
                     let def = &model.elements[e];
                     let x = def.nodes.map(|n| state.u[n]);
                     let frames = def.nodes.map(|n| state.frames[n]);
-                    model.element(e).response(&x, &frames, with_tangent).map_err(|failure| AssemblyFailure { element: e, failure })
+                    let rule = self.rules[def.section].as_ref().map_err(|f| AssemblyFailure { element: e, failure: f.clone() })?;
+                    let geom = self.geometry[e].as_ref().map_err(|f| AssemblyFailure { element: e, failure: f.clone() })?;
+                    model.element(e).response_with(rule, geom, &x, &frames, with_tangent).map_err(|failure| AssemblyFailure { element: e, failure })
                 })
                 .collect();
             for (e, out) in (start..end).zip(outputs) {

@@ -45,6 +45,8 @@ pub struct BuiltScene {
     pub warnings: Vec<String>,
     /// Panel, ply and material ids and the flat pattern, when the scene has a garment.
     pub garment: Option<crate::garment::export::GarmentLayout>,
+    /// Buckling-mode imperfection to seed before the solve.
+    pub imperfection: Option<crate::solver::imperfection::Imperfection>,
 }
 
 fn v3(a: [f64; 3]) -> Vector3<f64> {
@@ -381,6 +383,11 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
         if s.increments == 0 {
             return Err(loc.at(Some(&s.name), Some("increments"), format!("{field}.increments"), "expected at least one increment"));
         }
+        if let crate::solver::StepKind::Dynamic(ds) = &s.kind {
+            if let Some((key, msg)) = crate::solver::dynamics::check_settings(ds) {
+                return Err(loc.at(Some(&s.name), Some(key), format!("{field}.kind.{key}"), msg));
+            }
+        }
         for (lname, &v) in &s.scale {
             let Some(i) = loads.iter().position(|l| &l.name == lname) else {
                 let known: Vec<&str> = loads.iter().map(|l| l.name.as_str()).collect();
@@ -392,7 +399,8 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
             current[i] = v;
         }
         let _ = si;
-        steps.push(StepPlan { name: s.name.clone(), increments: s.increments, linear: s.linear, target_scales: current.clone(), kind: s.kind.clone() });
+        let kind = super::path::resolve_step_kind(s, &field, &loc, &node_sets, &loads, &fixed)?;
+        steps.push(StepPlan { name: s.name.clone(), increments: s.increments, linear: s.linear, target_scales: current.clone(), kind });
     }
 
     // Monitors.
@@ -414,6 +422,7 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
         monitors.push(Monitor { name: m.name.clone(), node, dofs: m.dofs.clone() });
     }
 
+    let imperfection = scene.imperfection.as_ref().map(|imp| super::path::resolve_imperfection(imp, &loc, &loads)).transpose()?;
     let (mut ties, mut seams) = crate::garment::build_scene_seams(&scene.seams, &loc, &node_sets, &loads, &x0, &mut frames0)?;
     let mut warnings = Vec::new();
     let mut layout = None;
@@ -433,7 +442,7 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
     crate::garment::apply_tapes(&seams, &x0, &mut elements, &mut sections);
     let dofs = DofMap::with_ties(&fixed, ties).map_err(|e| loc.at(None, Some("seams"), "seams", e))?;
     let model = Model { x0, frames0, elements, sections, parts, dofs, loads };
-    Ok(BuiltScene { model, steps, monitors, node_sets, quality, seams, warnings, garment: layout })
+    Ok(BuiltScene { model, steps, monitors, node_sets, quality, seams, warnings, garment: layout, imperfection })
 }
 
 fn check_young_poisson(young: f64, poisson: f64, bad: &dyn Fn(&str, &str) -> SceneError) -> Result<(), SceneError> {

@@ -2,6 +2,7 @@
 
 mod build;
 mod error;
+mod path;
 mod spec;
 
 pub use build::{build, BuiltScene, Monitor};

@@ -46,6 +46,9 @@ pub struct Scene {
     /// A garment (panels, plies, seams, stitch lines) whose plies become further parts.
     #[serde(default)]
     pub garment: Option<crate::garment::GarmentSpec>,
+    /// Geometric imperfection seeded into the reference geometry before the solve.
+    #[serde(default)]
+    pub imperfection: Option<ImperfectionSpec>,
 }
 
 /// A seam between two ordered node sets (e.g. `Edge` selectors), running the same way.
@@ -64,6 +67,30 @@ pub struct SeamSpec {
     /// (virtual sewing); without it the initial gap is kept.
     #[serde(default)]
     pub closing: Option<String>,
+}
+
+/// Geometric imperfections (added to the reference mid-surface and directors).
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum ImperfectionSpec {
+    /// Buckling modes of the perfect geometry: a linearized buckling analysis at the
+    /// reference state under the load patterns scaled by `scale`; mode k (from 1) is added
+    /// scaled to a largest translation of `amplitude` (a length).
+    BucklingModes { scale: BTreeMap<String, f64>, modes: Vec<ModeAmplitude> },
+    /// A seeded Gaussian random field along the reference directors with squared-exponential
+    /// covariance of correlation length `correlation_length`, scaled to a largest
+    /// displacement of `amplitude`; the directors follow the perturbed surface.
+    RandomField { amplitude: f64, correlation_length: f64, #[serde(default)] seed: u64 },
+}
+
+/// One mode of a buckling-mode imperfection.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ModeAmplitude {
+    /// Mode number, 1 = lowest critical load.
+    pub mode: usize,
+    /// Largest translation of the mode's contribution.
+    pub amplitude: f64,
 }
 
 /// A material model and its constants.
@@ -240,7 +267,8 @@ pub struct StepSpec {
     pub scale: BTreeMap<String, f64>,
     /// How the step is solved: `Static` (default), `StaticDamped` (Levenberg–Marquardt
     /// shift) or `Dynamic((dt: .., ..))` (pseudo-transient; `increments` is then unused and
-    /// every accepted time step is reported).
+    /// every accepted time step is reported), `ArcLength(..)` / `DisplacementControl(..)` (path
+    /// following through limit points) or `Buckling(modes: ..)` (linearized buckling).
     #[serde(default)]
     pub kind: StepKind,
 }

@@ -11,7 +11,9 @@
 //! steps, so the iteration turns into Newton's method as the motion dies out, and is cut
 //! back when Newton fails or the effective tangent is not positive definite. The step stops
 //! when the kinetic energy and the static residual ‖f_int − f_ext‖ are both below their
-//! tolerances.
+//! tolerances and (by default) the static tangent is positive definite there, so that an
+//! unstable equilibrium (a saddle, e.g. a flat sheet past its wrinkling threshold) is left
+//! along its unstable mode instead of being reported as rest.
 //!
 //! Mass is lumped (row sums of the consistent mass, i.e. the nodal area weights ∫N_a dA
 //! times the part's areal density ρ_A). Director tilts carry the fibre's rotary inertia
@@ -57,10 +59,14 @@ pub struct DynamicSettings {
     pub kinetic_tol: f64,
     /// At rest when ‖f_int − f_ext‖ ≤ rest_residual_tol · max(‖f_ext‖, ‖f_int‖ incl. reactions).
     pub rest_residual_tol: f64,
-    /// Factor on Δt after a step converged in at most 4 Newton iterations.
+    /// Factor on Δt after a step converged in at most 6 Newton iterations (Δt × 0.7 after
+    /// more than 9).
     pub grow: f64,
     /// Newton iterations per time step before it is retried with Δt/4.
     pub max_iterations: usize,
+    /// Rest also requires a stable equilibrium: the static tangent K, shifted by 1e-10·diag|K|
+    /// against round-off, factors as LLᵀ.
+    pub require_stable: bool,
 }
 
 impl Default for DynamicSettings {
@@ -78,7 +84,40 @@ impl Default for DynamicSettings {
             rest_residual_tol: 1e-6,
             grow: 1.5,
             max_iterations: 12,
+            require_stable: true,
         }
+    }
+}
+
+/// The first invalid field of `ds` and what is expected there, if any.
+pub fn check_settings(ds: &DynamicSettings) -> Option<(&'static str, &'static str)> {
+    let pos = |x: f64| x.is_finite() && x > 0.0;
+    if !pos(ds.dt) {
+        Some(("dt", "expected a positive first time step"))
+    } else if !pos(ds.dt_min) || ds.dt_min > ds.dt {
+        Some(("dt_min", "expected a positive smallest time step no larger than dt"))
+    } else if ds.dt_max.is_nan() || ds.dt_max < ds.dt {
+        Some(("dt_max", "expected a largest time step no smaller than dt"))
+    } else if !(ds.ramp_time.is_finite() && ds.ramp_time >= 0.0) {
+        Some(("ramp_time", "expected a non-negative ramp time"))
+    } else if !pos(ds.max_time) {
+        Some(("max_time", "expected a positive maximum time"))
+    } else if ds.max_steps == 0 {
+        Some(("max_steps", "expected at least one time step"))
+    } else if !(ds.mass_damping.is_finite() && ds.mass_damping >= 0.0) {
+        Some(("mass_damping", "expected a non-negative damping coefficient (1/time)"))
+    } else if !(ds.rotary_inertia.is_finite() && ds.rotary_inertia >= 0.0) {
+        Some(("rotary_inertia", "expected a non-negative scale"))
+    } else if !pos(ds.kinetic_tol) {
+        Some(("kinetic_tol", "expected a positive tolerance"))
+    } else if !pos(ds.rest_residual_tol) {
+        Some(("rest_residual_tol", "expected a positive tolerance"))
+    } else if !(ds.grow.is_finite() && ds.grow >= 1.0) {
+        Some(("grow", "expected a growth factor of at least 1"))
+    } else if ds.max_iterations == 0 {
+        Some(("max_iterations", "expected at least one iteration"))
+    } else {
+        None
     }
 }
 
@@ -98,6 +137,9 @@ pub struct DynamicInfo {
     /// Time steps rejected (Newton failure or indefinite effective tangent) since the
     /// previous report.
     pub rejected: usize,
+    /// Time steps so far in this step that met the rest criteria at an unstable
+    /// equilibrium (static tangent not positive definite) and were not accepted as rest.
+    pub unstable_rests: usize,
 }
 
 /// Lumped nodal masses of a model.
@@ -299,6 +341,24 @@ impl<'m> Solver<'m> {
         }
     }
 
+    /// Whether `state` is a stable equilibrium candidate: K + 1e-10·diag|K| (static tangent
+    /// at load scales `scales`) is positive definite (Lyapunov/Dirichlet: a strict minimum
+    /// of the potential energy).
+    fn stable(&mut self, state: &State, scales: &[f64]) -> bool {
+        if self.assemble(state, scales, true).is_err() {
+            return false;
+        }
+        let col_ptr = &self.assembler.pattern.col_ptr;
+        for c in 0..self.model.dofs.n_free {
+            let p = col_ptr[c + 1] - 1;
+            self.values[p] += 1e-10 * self.values[p].abs();
+        }
+        let t = Instant::now();
+        let kind = self.cholesky.factorize(&self.values);
+        self.timings.factorization += t.elapsed().as_secs_f64();
+        matches!(kind, Ok(FactorKind::Llt))
+    }
+
     /// Relative static residual ‖f_int − f_ext‖ / max(‖f_ext‖, ‖f_int‖) of `state` at load
     /// scales `scales` (prescribed values applied first); reactions are then available from
     /// [`Solver::internal_force`].
@@ -336,8 +396,8 @@ impl<'m> Solver<'m> {
             worst_element,
             cause,
         };
-        if !(ds.dt > 0.0 && ds.dt_min > 0.0 && ds.dt_max >= ds.dt && ds.grow >= 1.0) {
-            return Err(error(0, vec![], None, format!("invalid Dynamic settings: need 0 < dt_min, 0 < dt ≤ dt_max, grow ≥ 1 (got {ds:?})"), 0.0));
+        if let Some((key, msg)) = check_settings(ds) {
+            return Err(error(0, vec![], None, format!("invalid Dynamic setting {key}: {msg}"), 0.0));
         }
         let free_mass = model.dofs.eq.iter().enumerate().any(|(g, &e)| e != FIXED && g % NODE_DOFS < 3 && mass.translational[g / NODE_DOFS] > 0.0);
         if !free_mass {
@@ -359,6 +419,7 @@ impl<'m> Solver<'m> {
         let mut dt = ds.dt;
         let mut rejected = 0usize;
         let mut iterations = 0usize;
+        let mut unstable_rests = 0usize;
         for k in 1..=ds.max_steps {
             let scales = at(t + dt);
             let mut report_progress = |it: usize, res: f64| {
@@ -381,7 +442,13 @@ impl<'m> Solver<'m> {
                     let work: f64 = (0..nn).map(|n| (0..3).map(|c| self.f_ext[NODE_DOFS * n + c] * state.u[n][c]).sum::<f64>()).sum();
                     let e_ref = energy.abs().max(work.abs()).max(1e-300);
                     t += dt;
-                    let at_rest = t >= ds.ramp_time && ke <= ds.kinetic_tol * e_ref && static_residual <= ds.rest_residual_tol;
+                    let still = t >= ds.ramp_time && ke <= ds.kinetic_tol * e_ref && static_residual <= ds.rest_residual_tol;
+                    // A saddle (e.g. a flat sheet past its wrinkling threshold) is no rest state:
+                    // integration goes on and the unstable mode grows from round-off.
+                    let at_rest = still && (!ds.require_stable || self.stable(state, &scales));
+                    if still && !at_rest {
+                        unstable_rests += 1;
+                    }
                     let report = IncrementReport {
                         step: si,
                         step_name: step.name.clone(),
@@ -393,7 +460,8 @@ impl<'m> Solver<'m> {
                         cutbacks: rejected,
                         indefinite_tangent: false,
                         energy,
-                        dynamics: Some(DynamicInfo { time: t, dt, kinetic_energy: ke, static_residual, at_rest, rejected }),
+                        dynamics: Some(DynamicInfo { time: t, dt, kinetic_energy: ke, static_residual, at_rest, rejected, unstable_rests }),
+                        ..Default::default()
                     };
                     on_increment(&report, state, self);
                     if at_rest {
@@ -402,9 +470,9 @@ impl<'m> Solver<'m> {
                     iterations = 0;
                     rejected = 0;
                     prev = Kinematics { state: state.clone(), v, w };
-                    if its <= 4 {
+                    if its <= 6 {
                         dt = (dt * ds.grow).min(ds.dt_max);
-                    } else if its > 8 {
+                    } else if its > 9 {
                         dt *= 0.7;
                     }
                     if t >= ds.max_time {

@@ -47,7 +47,7 @@ pub struct Timings {
 }
 
 /// A converged nominal increment.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Default, Serialize)]
 pub struct IncrementReport {
     /// Step index.
     pub step: usize,
@@ -69,6 +69,25 @@ pub struct IncrementReport {
     pub indefinite_tangent: bool,
     /// Strain energy.
     pub energy: f64,
+    /// Load factor λ of a path-following step (scales = start + λ (target − start)).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub load_factor: Option<f64>,
+    /// Negative pivots of the tangent at the converged state (its number of negative
+    /// eigenvalues by Sylvester's law; 0 when LLᵀ succeeds).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub negative_pivots: Option<usize>,
+    /// Current stiffness parameter S_p = (f·K⁻¹f)₁ / (f·K⁻¹f) for the step's load change f,
+    /// 1 at the step's first increment (Bergan et al. 1978); its sign changes at a limit point.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stiffness_parameter: Option<f64>,
+    /// "limit point" (negative-pivot count and sign of the stiffness parameter change),
+    /// "bifurcation" (count changes alone) or "displacement turning point" (sign alone,
+    /// a snap-back) when this increment crossed one.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stability_event: Option<String>,
+    /// Linearized buckling results of a `Buckling` step.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub buckling: Option<super::BucklingReport>,
     /// Time-integration data of a `Dynamic` step (None for static steps).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub dynamics: Option<DynamicInfo>,
@@ -116,13 +135,19 @@ impl std::fmt::Display for SolveError {
             self.last_converged_time,
             self.cause,
             self.iteration,
-            self.residuals.iter().map(|r| format!("{r:.2e}")).collect::<Vec<_>>().join(", ")
+            residual_history(&self.residuals)
         )?;
         match self.worst_element {
             Some(e) => write!(f, "; worst element {e})"),
             None => write!(f, ")"),
         }
     }
+}
+
+/// The residual history for a message: all of it, or the first 4 and last 10 values.
+fn residual_history(r: &[f64]) -> String {
+    let f = |v: &[f64]| v.iter().map(|x| format!("{x:.2e}")).collect::<Vec<_>>().join(", ");
+    if r.len() <= 16 { f(r) } else { format!("{}, … {} more …, {}", f(&r[..4]), r.len() - 14, f(&r[r.len() - 10..])) }
 }
 
 /// Outcome of one attempted increment.
@@ -140,6 +165,8 @@ pub struct Solver<'m> {
     pub(super) values: Vec<f64>,
     pub(super) f_int: Vec<f64>,
     pub(super) f_ext: Vec<f64>,
+    /// Configuration-dependent nodal forces (contact), if any.
+    pub(super) nodal_forces: Option<Box<dyn super::NodalForces + 'm>>,
     /// Accumulated wall-time split.
     pub timings: Timings,
 }
@@ -161,8 +188,14 @@ impl<'m> Solver<'m> {
             cholesky,
             f_int: vec![0.0; ndof],
             f_ext: vec![0.0; ndof],
+            nodal_forces: None,
             timings,
         })
+    }
+
+    /// Adds configuration-dependent nodal forces (e.g. contact) to every later assembly.
+    pub fn set_nodal_forces(&mut self, forces: Box<dyn super::NodalForces + 'm>) {
+        self.nodal_forces = Some(forces);
     }
 
     /// Equations, stored tangent entries (upper triangle) and factor entries.
@@ -202,6 +235,16 @@ impl<'m> Solver<'m> {
         )?;
         self.timings.assembly += info.seconds;
         self.model.external_force(state, scales, &mut self.f_ext);
+        if let Some(forces) = &self.nodal_forces {
+            let mut jacobian = Vec::new();
+            forces.add(self.model, state, &mut self.f_ext, &mut jacobian);
+            if tangent {
+                let p = &self.assembler.pattern;
+                for (n, j) in &jacobian {
+                    super::nodal::add_node_block(self.model, &p.col_ptr, &p.row_idx, &mut self.values, *n, j);
+                }
+            }
+        }
         Ok(info.energy)
     }
 
@@ -349,15 +392,35 @@ impl<'m> Solver<'m> {
         let mut scales = vec![0.0; nl];
         let total: usize = steps.iter().map(|s| s.increments.max(1)).sum();
         let mut done_before = 0usize;
+        let mut tracker = super::arclength::StabilityTracker::default();
         for (si, step) in steps.iter().enumerate() {
             let start = scales.clone();
             let n_inc = step.increments.max(1);
-            if let StepKind::Dynamic(ds) = &step.kind {
-                let frac = (done_before as f64 / total as f64, n_inc as f64 / total as f64);
-                self.run_dynamic_step(si, step, ds, &start, state, on_increment, progress, frac.0, frac.1)?;
-                scales = step.target_scales.clone();
-                done_before += n_inc;
-                continue;
+            tracker.new_step();
+            match &step.kind {
+                StepKind::Static | StepKind::StaticDamped => {}
+                StepKind::Dynamic(ds) => {
+                    let frac = (done_before as f64 / total as f64, n_inc as f64 / total as f64);
+                    self.run_dynamic_step(si, step, ds, &start, state, on_increment, progress, frac.0, frac.1)?;
+                    scales = step.target_scales.clone();
+                    done_before += n_inc;
+                    continue;
+                }
+                StepKind::ArcLength { .. } | StepKind::DisplacementControl { .. } => {
+                    let frac0 = done_before as f64 / total as f64;
+                    let frac1 = (done_before + n_inc) as f64 / total as f64;
+                    scales = self.run_path(si, step, &start, state, &mut tracker, on_increment, &mut |p: &Progress| {
+                        progress(&Progress { fraction: frac0 + p.fraction * (frac1 - frac0), ..p.clone() })
+                    })?;
+                    done_before += n_inc;
+                    continue;
+                }
+                StepKind::Buckling { modes, shift } => {
+                    let report = self.run_buckling(si, step, &start, state, *modes, *shift)?;
+                    on_increment(&report, state, self);
+                    done_before += n_inc;
+                    continue;
+                }
             }
             let at = |tau: f64| -> Vec<f64> { start.iter().zip(&step.target_scales).map(|(a, b)| a + tau * (b - a)).collect() };
             let mut tau = 0.0;
@@ -390,6 +453,11 @@ impl<'m> Solver<'m> {
                             }
                             if (tau - goal).abs() < 1e-12 {
                                 tau = goal;
+                                let (negative_pivots, stiffness_parameter, stability_event) = if step.linear {
+                                    (None, None, None)
+                                } else {
+                                    self.stability_at(state, &start, &step.target_scales, &mut tracker)
+                                };
                                 let report = IncrementReport {
                                     step: si,
                                     step_name: step.name.clone(),
@@ -401,7 +469,11 @@ impl<'m> Solver<'m> {
                                     cutbacks,
                                     indefinite_tangent: indefinite,
                                     energy,
+                                    negative_pivots,
+                                    stiffness_parameter,
+                                    stability_event,
                                     dynamics: None,
+                                    ..Default::default()
                                 };
                                 on_increment(&report, state, self);
                                 break;
