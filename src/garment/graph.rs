@@ -40,10 +40,13 @@ pub fn span_segments(p: &PanelSpec, from: usize, to: usize) -> Vec<usize> {
     out
 }
 
+/// Sampled outline points and, per outline segment, its range of sampled segments.
+pub type SampledOutline = (Vec<[f64; 2]>, Vec<std::ops::Range<usize>>);
+
 /// The outline with its curved edges sampled at spacing about `h`: the points, and for each
 /// outline segment the range of sampled segments that make it up. A curve is a circular arc
 /// (minor arc: |sagitta| below half the chord) through the segment's end vertices.
-pub fn sampled_outline(p: &PanelSpec, h: f64) -> Result<(Vec<[f64; 2]>, Vec<std::ops::Range<usize>>), String> {
+pub fn sampled_outline(p: &PanelSpec, h: f64) -> Result<SampledOutline, String> {
     let n = p.outline.len();
     let mut sagitta = vec![0.0; n];
     for c in &p.curves {
