@@ -8,7 +8,7 @@ use nalgebra::Vector3;
 use std::ops::Range;
 
 use super::graph::{sampled_outline, span_segments, GarmentGraph};
-use super::mesh::{mesh_polygon, PatternMesh};
+use super::mesh::{mapped_counts, mesh_polygon, PatternMesh};
 use super::spec::{GarmentSpec, SpanRef};
 use super::seam::rigid_link;
 use super::{seam_ties, SeamInfo};
@@ -68,6 +68,37 @@ fn span_row(pattern: &PatternMesh, ranges: &[Range<usize>], panel: &super::spec:
     row
 }
 
+/// Requested element edges per sampled outline segment of panel `pi`, so that its seam rows
+/// match a mapped-grid partner: where a seam joins a single straight segment of this panel to
+/// a single side of a partner meshed by the mapped grid, that side's count (matching when
+/// it is even, as the triangle split puts two element edges on each boundary piece).
+fn matching_counts(spec: &GarmentSpec, pi: usize, h: f64) -> Vec<Option<usize>> {
+    let sampled = |p: &super::spec::PanelSpec| sampled_outline(p, h).ok();
+    let Some((outline, ranges)) = sampled(&spec.panels[pi]) else { return Vec::new() };
+    let mut counts = vec![None; outline.len()];
+    let single = |p: &super::spec::PanelSpec, side: &SpanRef, ranges: &[Range<usize>]| -> Option<usize> {
+        let span = p.edges.get(&side.edge)?;
+        let segs = span_segments(p, span.from, span.to);
+        (segs.len() == 1 && ranges[segs[0]].len() == 1).then(|| ranges[segs[0]].start)
+    };
+    for s in &spec.seams {
+        for (mine, other) in [(&s.a, &s.b), (&s.b, &s.a)] {
+            if mine.panel != spec.panels[pi].name {
+                continue;
+            }
+            let Some(po) = spec.panels.iter().find(|p| p.name == other.panel) else { continue };
+            let Some((o_outline, o_ranges)) = sampled(po) else { continue };
+            let (Some(k), Some(ko), Some(n)) = (single(&spec.panels[pi], mine, &ranges), single(po, other, &o_ranges), mapped_counts(&o_outline, h)) else {
+                continue;
+            };
+            if let Some(c) = counts.get_mut(k) {
+                *c = Some(n[ko % 4]);
+            }
+        }
+    }
+    counts
+}
+
 /// Distance from a point to a polyline in the plane.
 fn distance_to_polyline(p: [f64; 2], line: &[[f64; 2]]) -> f64 {
     line.windows(2)
@@ -101,7 +132,7 @@ impl GarmentMesh {
                 return Err(loc.at(Some(&p.name), Some("grain"), format!("{field}.grain"), "expected a non-zero grain direction"));
             }
             let (outline, ranges) = sampled_outline(p, h).map_err(|e| loc.at(Some(&p.name), Some("curves"), format!("{field}.curves"), format!("panel \"{}\": {e}", p.name)))?;
-            let pattern = mesh_polygon(&outline, h).map_err(|e| loc.at(Some(&p.name), Some("outline"), format!("{field}.outline"), format!("panel \"{}\": {e}", p.name)))?;
+            let pattern = mesh_polygon(&outline, h, &matching_counts(spec, pi, h)).map_err(|e| loc.at(Some(&p.name), Some("outline"), format!("{field}.outline"), format!("panel \"{}\": {e}", p.name)))?;
             let fd = 1e-6 * h;
             let mid: Vec<Vector3<f64>> = pattern.uv.iter().map(|&q| p.placement.map(q)).collect();
             let dirs: Vec<Vector3<f64>> = pattern.uv.iter().map(|&q| p.placement.director(q, fd)).collect();
