@@ -39,14 +39,14 @@ pub struct BuiltScene {
     pub node_sets: BTreeMap<String, Vec<usize>>,
     /// Mesh quality per part.
     pub quality: Vec<(String, MeshQuality)>,
+    /// Buckling-mode imperfection to seed before the solve.
+    pub imperfection: Option<crate::solver::imperfection::Imperfection>,
     /// Seams (ties) of the model.
     pub seams: Vec<crate::garment::SeamInfo>,
     /// Warnings (e.g. garment panels neither seamed nor supported), located in the file.
     pub warnings: Vec<String>,
     /// Panel, ply and material ids and the flat pattern, when the scene has a garment.
     pub garment: Option<crate::garment::export::GarmentLayout>,
-    /// Buckling-mode imperfection to seed before the solve.
-    pub imperfection: Option<crate::solver::imperfection::Imperfection>,
 }
 
 fn v3(a: [f64; 3]) -> Vector3<f64> {
@@ -442,7 +442,7 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
     crate::garment::apply_tapes(&seams, &x0, &mut elements, &mut sections);
     let dofs = DofMap::with_ties(&fixed, ties).map_err(|e| loc.at(None, Some("seams"), "seams", e))?;
     let model = Model { x0, frames0, elements, sections, parts, dofs, loads };
-    Ok(BuiltScene { model, steps, monitors, node_sets, quality, seams, warnings, garment: layout, imperfection })
+    Ok(BuiltScene { model, steps, monitors, node_sets, quality, imperfection, seams, warnings, garment: layout })
 }
 
 fn check_young_poisson(young: f64, poisson: f64, bad: &dyn Fn(&str, &str) -> SceneError) -> Result<(), SceneError> {

@@ -40,33 +40,15 @@ pub struct Scene {
     /// Solver controls.
     #[serde(default)]
     pub solver: SolverSettings,
+    /// Geometric imperfection seeded into the reference geometry before the solve.
+    #[serde(default)]
+    pub imperfection: Option<ImperfectionSpec>,
     /// Seams: master–slave ties between node rows of the parts.
     #[serde(default)]
     pub seams: Vec<SeamSpec>,
     /// A garment (panels, plies, seams, stitch lines) whose plies become further parts.
     #[serde(default)]
     pub garment: Option<crate::garment::GarmentSpec>,
-    /// Geometric imperfection seeded into the reference geometry before the solve.
-    #[serde(default)]
-    pub imperfection: Option<ImperfectionSpec>,
-}
-
-/// A seam between two ordered node sets (e.g. `Edge` selectors), running the same way.
-#[derive(Clone, Debug, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct SeamSpec {
-    /// Seam name.
-    pub name: String,
-    /// Master node row (a node set).
-    pub master: String,
-    /// Slave node row (a node set); make the finer row the slave.
-    pub slave: String,
-    /// Plain (hinge), Welded or Taped.
-    pub kind: crate::garment::SeamKind,
-    /// A `Closure` load pattern whose scale drives the initial gap between the rows to zero
-    /// (virtual sewing); without it the initial gap is kept.
-    #[serde(default)]
-    pub closing: Option<String>,
 }
 
 /// Geometric imperfections (added to the reference mid-surface and directors).
@@ -91,6 +73,25 @@ pub struct ModeAmplitude {
     pub mode: usize,
     /// Largest translation of the mode's contribution.
     pub amplitude: f64,
+}
+
+
+/// A seam between two ordered node sets (e.g. `Edge` selectors), running the same way.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SeamSpec {
+    /// Seam name.
+    pub name: String,
+    /// Master node row (a node set).
+    pub master: String,
+    /// Slave node row (a node set); make the finer row the slave.
+    pub slave: String,
+    /// Plain (hinge), Welded or Taped.
+    pub kind: crate::garment::SeamKind,
+    /// A `Closure` load pattern whose scale drives the initial gap between the rows to zero
+    /// (virtual sewing); without it the initial gap is kept.
+    #[serde(default)]
+    pub closing: Option<String>,
 }
 
 /// A material model and its constants.

@@ -12,7 +12,7 @@
 //!   the increment so far (largest (Δu + δu)·Δu) is chosen. Complex roots fall back to the
 //!   updated normal plane, δλ = −(Δu·δu_r)/(Δu·δu_t) (Ramm 1981).
 //! - displacement control (Batoz & Dhatt 1979): the controlled DOF is moved by the
-//!   predictor only, δλ = −δu_r[c] / δu_t[c] in every corrector.
+//!   predictor only, δλ = −δu_r(c) / δu_t(c) in every corrector.
 //!
 //! Predictor: Δλ₀ = ± Δl / ‖δu_t‖, the sign from the previous converged increment,
 //! sign(Δu_prev·δu_t) (Feng, Perić & Owen 1996), and on the first increment from the sign
