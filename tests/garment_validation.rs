@@ -171,3 +171,45 @@ fn self_intersecting_outline_is_named() {
     assert!(e.message.contains("panel \"sleeve\"") && e.message.contains("intersects itself"), "{e}");
     assert_eq!(e.line, line_of(&text, "(name: \"sleeve\""));
 }
+
+/// A curved edge (circular arc, sagitta s over chord c) is sampled: the seam joining it
+/// must match the arc length 2R·asin(c/2R), R = (c²/4 + s²)/(2s) — a straight partner of the
+/// chord length is rejected beyond the 2 % tolerance, one of the arc length accepted.
+#[test]
+fn curved_edge_uses_its_arc_length() {
+    let (c, s) = (0.4_f64, 0.1_f64);
+    let r = (c * c / 4.0 + s * s) / (2.0 * s);
+    let arc = 2.0 * r * (c / (2.0 * r)).asin();
+    let curved = GOOD.replacen("plies: [\"shell\"]),", "curves: [(edge: \"hem\", sagitta: 0.1)],\n             plies: [\"shell\"]),", 1);
+    // front.hem (curved) sewn to back.hem (straight, 0.4 m): 13 % shorter than the arc.
+    let with_seam = |text: &str| text.replace(
+        "             kind: Welded),\n",
+        "             kind: Welded),\n            (name: \"hem_seam\",\n             a: (panel: \"front\", edge: \"hem\"),\n             b: (panel: \"back\", edge: \"hem\"),\n             kind: Plain),\n",
+    );
+    let text = with_seam(&curved);
+    let e = error_of(&text);
+    println!("{e}");
+    assert!(e.message.contains("\"hem_seam\"") && e.message.contains("different length"), "{e}");
+    let shown: f64 = e.message.split("front.hem is ").nth(1).and_then(|t| t.split(' ').next()).and_then(|v| v.parse().ok()).unwrap_or(0.0);
+    println!("sampled arc {shown} m, exact {arc:.4} m");
+    assert!((shown - arc).abs() < 0.01 * arc);
+    // A back hem as long as the arc (outline widened to 0.4 → arc length) is accepted.
+    let wide = text.replacen("(0.4, 0.0), (0.4, 0.6), (0.0, 0.6)],\n             edges: {\"hem\": (from: 0, to: 1), \"right\": (from: 1, to: 2), \"neck\": (from: 2, to: 3), \"left\": (from: 3, to: 0)},\n             plies: [\"shell\"],\n             placement",
+        &format!("({arc}, 0.0), ({arc}, 0.6), (0.0, 0.6)],\n             edges: {{\"hem\": (from: 0, to: 1), \"right\": (from: 1, to: 2), \"neck\": (from: 2, to: 3), \"left\": (from: 3, to: 0)}},\n             plies: [\"shell\"],\n             placement"), 1);
+    assert_ne!(wide, text);
+    let (g, graph) = graph_of(&wide);
+    assert_eq!(graph.panels_of(&g, "hem_seam"), Some(("front", "back")));
+    // Meshed: the front hem's sample points (every second node of the split mesh's row) lie
+    // on the arc (1e-9); the mid-side nodes between them on the chords, within the
+    // sub-chord's sagitta ℓ²/(8R) ≤ (2h)²/(8R), h = 0.1.
+    let sc = scene::parse("top.ron", &wide).unwrap_or_else(|e| panic!("{e}"));
+    let built = scene::build(&sc, "top.ron", &wide).unwrap_or_else(|e| panic!("{e}"));
+    let seam = built.seams.iter().find(|x| x.name == "hem_seam").expect("hem seam");
+    let centre = nalgebra::Vector3::new(0.2, r - s, 0.0);
+    for (k, &n) in seam.master.iter().enumerate() {
+        let off = ((built.model.x0[n] - centre).norm() - r).abs();
+        let bound = if k % 2 == 0 { 1e-9 * r } else { 0.2_f64.powi(2) / (8.0 * r) };
+        assert!(off <= bound, "node {n} (row position {k}) is {off:e} off the arc");
+    }
+    assert!(seam.master.len() > 10);
+}

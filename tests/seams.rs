@@ -285,3 +285,99 @@ fn taped_seam_stiffens_a_strip_of_the_allowance_width() {
     assert!(rel(w, expect) < 5e-3);
     assert!(w < welded * 0.99);
 }
+
+/// Ground spring f = −k u on a node (a configuration-dependent nodal force, the hook contact
+/// uses).
+struct Spring {
+    node: usize,
+    k: f64,
+}
+
+impl plyshell::solver::NodalForces for Spring {
+    fn add(&self, _model: &plyshell::model::Model, state: &plyshell::model::State, f_ext: &mut [f64], jacobian: &mut Vec<(usize, nalgebra::Matrix3<f64>)>) {
+        for a in 0..3 {
+            f_ext[5 * self.node + a] -= self.k * state.u[self.node][a];
+        }
+        jacobian.push((self.node, -nalgebra::Matrix3::identity() * self.k));
+    }
+}
+
+/// Nodal forces (contact's hook) on a tied slave node reach the equations through the tie:
+/// a ground spring on the seam's slave corner of the welded cut strip gives the same tip
+/// deflection as the spring on that point of the uncut strip (one linear solve, so the
+/// spring's stiffness must be in the tangent too; 1e-9).
+#[test]
+fn nodal_forces_on_tied_slaves_fold_onto_masters() {
+    use plyshell::solver::Solver;
+    let bending = r#"EdgeForce(set: "tip", force_per_length: (0.0, 0.0, 0.1))"#;
+    let run = |parts: &str, sets: &str, seams: &str, spring_part: usize| -> f64 {
+        let case = Case {
+            poisson: 0.3,
+            parts,
+            sets,
+            boundary: r#"Clamp(set: "root")"#,
+            seams,
+            load: bending,
+            linear: true,
+            increments: 1,
+            monitor_part: if spring_part == 0 { "u" } else { "b" },
+            monitor: [L, 0.0, 0.0],
+        };
+        let text = scene_text(&case);
+        let sc = scene::parse("seams.ron", &text).unwrap_or_else(|e| panic!("{e}"));
+        let built = scene::build(&sc, "seams.ron", &text).unwrap_or_else(|e| panic!("{e}"));
+        let model = &built.model;
+        let p = &model.parts[spring_part];
+        let node = (p.first_node..p.first_node + p.n_nodes)
+            .min_by(|&a, &b| (model.x0[a] - nalgebra::Vector3::new(0.5 * L, 0.0, 0.0)).norm().total_cmp(&(model.x0[b] - nalgebra::Vector3::new(0.5 * L, 0.0, 0.0)).norm()))
+            .unwrap_or(0);
+        let mut solver = Solver::new(model, sc.solver.clone()).unwrap_or_else(|e| panic!("{e}"));
+        solver.set_nodal_forces(Box::new(Spring { node, k: 50.0 }));
+        let mut state = model.initial_state();
+        solver.run(&built.steps, &mut state, &mut |_, _, _| {}, &mut |_| {}).unwrap_or_else(|e| panic!("{e}"));
+        state.u[built.monitors[0].node].z
+    };
+    let uncut = run(&part("u", L, 16, 2, 0.0), UNCUT_SETS, "", 0);
+    let parts = format!("{}, {}", part("a", 0.5 * L, 8, 2, 0.0), part("b", 0.5 * L, 8, 2, 0.5 * L));
+    let cut = run(&parts, CUT_SETS, r#"(name: "cut", master: "cut_a", slave: "cut_b", kind: Welded)"#, 1);
+    println!("spring on the seam: uncut {uncut:.9e}, cut (spring on the slave) {cut:.9e}");
+    assert!(rel(cut, uncut) < 1e-9);
+}
+
+/// Inertia of tied slaves acts through their masters (Tᵀ M T): the welded cut strip (matching
+/// meshes) follows the same pseudo-transient history as the uncut strip — kinetic energy of
+/// the first ten backward-Euler steps equal within 1e-8.
+#[test]
+fn dynamic_steps_carry_the_mass_of_tied_slaves() {
+    use plyshell::solver::Solver;
+    let history = |parts: &str, sets: &str, seams: &str| -> Vec<f64> {
+        let text = format!(
+            r#"Scene(
+    name: "dyn",
+    materials: {{"m": StVenantKirchhoff(young: {E:e}, poisson: 0.3)}},
+    parts: [{parts}],
+    node_sets: {{{sets}}},
+    boundary: [Clamp(set: "root")],
+    loads: {{"p": EdgeForce(set: "tip", force_per_length: (0.0, 0.0, 0.1))}},
+    seams: [{seams}],
+    steps: [(name: "load", increments: 1, scale: {{"p": 1.0}}, kind: Dynamic((dt: 1e-3, dt_max: 1e-3, max_steps: 10)))],
+)"#
+        );
+        let sc = scene::parse("dyn.ron", &text).unwrap_or_else(|e| panic!("{e}"));
+        let built = scene::build(&sc, "dyn.ron", &text).unwrap_or_else(|e| panic!("{e}"));
+        let mut solver = Solver::new(&built.model, sc.solver.clone()).unwrap_or_else(|e| panic!("{e}"));
+        let mut state = built.model.initial_state();
+        let mut ke = Vec::new();
+        let _ = solver.run(&built.steps, &mut state, &mut |r, _, _| ke.extend(r.dynamics.as_ref().map(|d| d.kinetic_energy)), &mut |_| {});
+        ke
+    };
+    let with_mass = |p: String| p.replace("thickness: 0.01,", "thickness: 0.01, areal_density: 0.5,");
+    let uncut = history(&with_mass(part("u", L, 16, 2, 0.0)), UNCUT_SETS, "");
+    let parts = with_mass(format!("{}, {}", part("a", 0.5 * L, 8, 2, 0.0), part("b", 0.5 * L, 8, 2, 0.5 * L)));
+    let cut = history(&parts, CUT_SETS, r#"(name: "cut", master: "cut_a", slave: "cut_b", kind: Welded)"#);
+    println!("kinetic energy uncut {:?}\n               cut   {:?}", &uncut[..3.min(uncut.len())], &cut[..3.min(cut.len())]);
+    assert!(uncut.len() >= 10 && cut.len() >= 10, "{} {}", uncut.len(), cut.len());
+    for (a, b) in uncut.iter().zip(&cut).take(10) {
+        assert!(rel(*b, *a) < 1e-8, "{b} vs {a}");
+    }
+}

@@ -25,6 +25,24 @@ pub struct Pattern {
     pub row_idx: Vec<usize>,
 }
 
+impl Pattern {
+    /// Adds `m` w_r w_c to every stored entry (r, c), r ≤ c, of the weighted equations
+    /// `exp` — a diagonal term m of a tied slave DOF taken through the tie (Tᵀ M T).
+    pub fn add_weighted(&self, values: &mut [f64], exp: &[(usize, f64)], m: f64) {
+        for &(r, wr) in exp {
+            for &(c, wc) in exp {
+                if r > c {
+                    continue;
+                }
+                let rows = &self.row_idx[self.col_ptr[c]..self.col_ptr[c + 1]];
+                if let Ok(p) = rows.binary_search(&r) {
+                    values[self.col_ptr[c] + p] += m * wr * wc;
+                }
+            }
+        }
+    }
+}
+
 /// An element failure located in the model.
 #[derive(Clone, Debug)]
 pub struct AssemblyFailure {
@@ -50,18 +68,6 @@ pub struct Assembler {
     tied: Vec<Vec<(u16, u32, f64)>>,
 }
 
-/// Equations and weights a local element DOF maps to: its own equation, or a tied slave's
-/// free masters (master–slave transformation).
-fn expanded(model: &Model, g: usize) -> Vec<(usize, f64)> {
-    let dofs = &model.dofs;
-    if dofs.eq[g] != FIXED {
-        return vec![(dofs.eq[g], 1.0)];
-    }
-    match dofs.tie_of[g] {
-        UNTIED => Vec::new(),
-        t => dofs.tie_eqs[t as usize].clone(),
-    }
-}
 
 /// What one assembly produced besides the matrix values.
 #[derive(Clone, Debug, Default)]
@@ -110,7 +116,7 @@ impl Assembler {
         };
         for el in model.elements.iter().filter(|el| is_tied(el)) {
             let mut all: Vec<usize> = (0..ELEMENT_DOFS)
-                .flat_map(|i| expanded(model, NODE_DOFS * el.nodes[i / NODE_DOFS] + i % NODE_DOFS))
+                .flat_map(|i| model.dofs.expand(NODE_DOFS * el.nodes[i / NODE_DOFS] + i % NODE_DOFS))
                 .map(|(e, _)| e)
                 .collect();
             all.sort_unstable();
@@ -152,14 +158,6 @@ impl Assembler {
                 s
             })
             .collect();
-        let rules: Vec<Result<SectionRule, ElementFailure>> = model.sections.iter().map(SectionRule::new).collect();
-        let geometry = (0..model.elements.len())
-            .into_par_iter()
-            .map(|e| match &rules[model.elements[e].section] {
-                Ok(rule) => model.element(e).geometry(rule),
-                Err(f) => Err(f.clone()),
-            })
-            .collect();
         let slot_of = |r: usize, c: usize| -> Option<u32> {
             let rows = &pattern.row_idx[pattern.col_ptr[c]..pattern.col_ptr[c + 1]];
             rows.binary_search(&r).ok().map(|p| (pattern.col_ptr[c] + p) as u32)
@@ -172,7 +170,7 @@ impl Assembler {
                     return Vec::new();
                 }
                 let globals: [usize; ELEMENT_DOFS] = std::array::from_fn(|i| NODE_DOFS * el.nodes[i / NODE_DOFS] + i % NODE_DOFS);
-                let exp: Vec<Vec<(usize, f64)>> = globals.iter().map(|&g| expanded(model, g)).collect();
+                let exp: Vec<Vec<(usize, f64)>> = globals.iter().map(|&g| model.dofs.expand(g)).collect();
                 let mut list = Vec::new();
                 for i in 0..ELEMENT_DOFS {
                     for j in 0..ELEMENT_DOFS {
@@ -192,6 +190,14 @@ impl Assembler {
                     }
                 }
                 list
+            })
+            .collect();
+        let rules: Vec<Result<SectionRule, ElementFailure>> = model.sections.iter().map(SectionRule::new).collect();
+        let geometry = (0..model.elements.len())
+            .into_par_iter()
+            .map(|e| match &rules[model.elements[e].section] {
+                Ok(rule) => model.element(e).geometry(rule),
+                Err(f) => Err(f.clone()),
             })
             .collect();
         Self { pattern, slots, rules, geometry, tied }

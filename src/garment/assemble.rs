@@ -5,8 +5,10 @@ use std::collections::{BTreeMap, BTreeSet};
 
 use nalgebra::Vector3;
 
-use super::graph::{span_segments, GarmentGraph};
-use super::mesh::{mesh_polygon, PatternMesh};
+use std::ops::Range;
+
+use super::graph::{sampled_outline, span_segments, GarmentGraph};
+use super::mesh::{mapped_counts, mesh_polygon, PatternMesh};
 use super::spec::{GarmentSpec, SpanRef};
 use super::seam::rigid_link;
 use super::{seam_ties, SeamInfo};
@@ -45,13 +47,15 @@ pub struct GarmentMesh {
     pub parts: Vec<GarmentPart>,
     /// Flat pattern mesh of each panel.
     pub patterns: Vec<PatternMesh>,
+    /// Per panel, the sampled-outline segments of each outline segment (curved edges).
+    pub sample_ranges: Vec<Vec<Range<usize>>>,
 }
 
 /// Node row (pattern-mesh nodes) of a panel's named span, in span direction.
-fn span_row(pattern: &PatternMesh, panel: &super::spec::PanelSpec, side: &SpanRef) -> Vec<usize> {
+fn span_row(pattern: &PatternMesh, ranges: &[Range<usize>], panel: &super::spec::PanelSpec, side: &SpanRef) -> Vec<usize> {
     let Some(span) = panel.edges.get(&side.edge) else { return Vec::new() };
     let mut row: Vec<usize> = Vec::new();
-    for seg in span_segments(panel, span.from, span.to) {
+    for seg in span_segments(panel, span.from, span.to).into_iter().flat_map(|s| ranges[s].clone()) {
         for &n in &pattern.segment_rows[seg] {
             if row.last() != Some(&n) {
                 row.push(n);
@@ -62,6 +66,37 @@ fn span_row(pattern: &PatternMesh, panel: &super::spec::PanelSpec, side: &SpanRe
         row.reverse();
     }
     row
+}
+
+/// Requested element edges per sampled outline segment of panel `pi`, so that its seam rows
+/// match a mapped-grid partner: where a seam joins a single straight segment of this panel to
+/// a single side of a partner meshed by the mapped grid, that side's count (matching when
+/// it is even, as the triangle split puts two element edges on each boundary piece).
+fn matching_counts(spec: &GarmentSpec, pi: usize, h: f64) -> Vec<Option<usize>> {
+    let sampled = |p: &super::spec::PanelSpec| sampled_outline(p, h).ok();
+    let Some((outline, ranges)) = sampled(&spec.panels[pi]) else { return Vec::new() };
+    let mut counts = vec![None; outline.len()];
+    let single = |p: &super::spec::PanelSpec, side: &SpanRef, ranges: &[Range<usize>]| -> Option<usize> {
+        let span = p.edges.get(&side.edge)?;
+        let segs = span_segments(p, span.from, span.to);
+        (segs.len() == 1 && ranges[segs[0]].len() == 1).then(|| ranges[segs[0]].start)
+    };
+    for s in &spec.seams {
+        for (mine, other) in [(&s.a, &s.b), (&s.b, &s.a)] {
+            if mine.panel != spec.panels[pi].name {
+                continue;
+            }
+            let Some(po) = spec.panels.iter().find(|p| p.name == other.panel) else { continue };
+            let Some((o_outline, o_ranges)) = sampled(po) else { continue };
+            let (Some(k), Some(ko), Some(n)) = (single(&spec.panels[pi], mine, &ranges), single(po, other, &o_ranges), mapped_counts(&o_outline, h)) else {
+                continue;
+            };
+            if let Some(c) = counts.get_mut(k) {
+                *c = Some(n[ko % 4]);
+            }
+        }
+    }
+    counts
 }
 
 /// Distance from a point to a polyline in the plane.
@@ -86,6 +121,7 @@ impl GarmentMesh {
         let h = spec.element_size;
         let mut parts = Vec::new();
         let mut patterns = Vec::new();
+        let mut sample_ranges = Vec::new();
         for (pi, p) in spec.panels.iter().enumerate() {
             let field = format!("garment.panels[{}]", p.name);
             if let Some(msg) = p.placement.problem() {
@@ -95,7 +131,8 @@ impl GarmentMesh {
             if !(g[0].is_finite() && g[1].is_finite()) || g[0].hypot(g[1]) == 0.0 {
                 return Err(loc.at(Some(&p.name), Some("grain"), format!("{field}.grain"), "expected a non-zero grain direction"));
             }
-            let pattern = mesh_polygon(&p.outline, h).map_err(|e| loc.at(Some(&p.name), Some("outline"), format!("{field}.outline"), format!("panel \"{}\": {e}", p.name)))?;
+            let (outline, ranges) = sampled_outline(p, h).map_err(|e| loc.at(Some(&p.name), Some("curves"), format!("{field}.curves"), format!("panel \"{}\": {e}", p.name)))?;
+            let pattern = mesh_polygon(&outline, h, &matching_counts(spec, pi, h)).map_err(|e| loc.at(Some(&p.name), Some("outline"), format!("{field}.outline"), format!("panel \"{}\": {e}", p.name)))?;
             let fd = 1e-6 * h;
             let mid: Vec<Vector3<f64>> = pattern.uv.iter().map(|&q| p.placement.map(q)).collect();
             let dirs: Vec<Vector3<f64>> = pattern.uv.iter().map(|&q| p.placement.director(q, fd)).collect();
@@ -112,7 +149,7 @@ impl GarmentMesh {
             let total: f64 = thick.iter().sum();
             let mut edges = BTreeMap::new();
             for name in p.edges.keys() {
-                edges.insert(name.clone(), span_row(&pattern, p, &SpanRef { panel: p.name.clone(), edge: name.clone(), reversed: false }));
+                edges.insert(name.clone(), span_row(&pattern, &ranges, p, &SpanRef { panel: p.name.clone(), edge: name.clone(), reversed: false }));
             }
             let mut below = 0.0;
             for (k, ply) in p.plies.iter().enumerate() {
@@ -131,8 +168,9 @@ impl GarmentMesh {
                 parts.push(GarmentPart { name, panel: pi, ply: k, material, thickness: thick[k], areal_density, mesh, grains: grains.clone() });
             }
             patterns.push(pattern);
+            sample_ranges.push(ranges);
         }
-        Ok(Self { graph, parts, patterns })
+        Ok(Self { graph, parts, patterns, sample_ranges })
     }
 
     /// Global part index of (panel, ply), given the index of the first garment part.
@@ -177,8 +215,8 @@ impl GarmentMesh {
                     s.name
                 )));
             }
-            let row_a = span_row(&self.patterns[pa], &spec.panels[pa], &s.a);
-            let row_b = span_row(&self.patterns[pb], &spec.panels[pb], &s.b);
+            let row_a = span_row(&self.patterns[pa], &self.sample_ranges[pa], &spec.panels[pa], &s.a);
+            let row_b = span_row(&self.patterns[pb], &self.sample_ranges[pb], &spec.panels[pb], &s.b);
             let global = |part: usize, row: &[usize]| -> Vec<usize> { row.iter().map(|n| n + first_node[part]).collect() };
             let na = spec.panels[pa].plies.len();
             let nb = spec.panels[pb].plies.len();

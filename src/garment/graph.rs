@@ -40,12 +40,71 @@ pub fn span_segments(p: &PanelSpec, from: usize, to: usize) -> Vec<usize> {
     out
 }
 
-/// Pattern length of an edge span.
-pub fn span_length(p: &PanelSpec, from: usize, to: usize) -> f64 {
+/// Sampled outline points and, per outline segment, its range of sampled segments.
+pub type SampledOutline = (Vec<[f64; 2]>, Vec<std::ops::Range<usize>>);
+
+/// The outline with its curved edges sampled at spacing about `h`: the points, and for each
+/// outline segment the range of sampled segments that make it up. A curve is a circular arc
+/// (minor arc: |sagitta| below half the chord) through the segment's end vertices.
+pub fn sampled_outline(p: &PanelSpec, h: f64) -> Result<SampledOutline, String> {
+    let n = p.outline.len();
+    let mut sagitta = vec![0.0; n];
+    for c in &p.curves {
+        let span = p.edges.get(&c.edge).ok_or_else(|| format!("curve on unknown edge \"{}\"", c.edge))?;
+        let segs = span_segments(p, span.from, span.to);
+        if segs.len() != 1 {
+            return Err(format!("curved edge \"{}\" must span exactly one outline segment", c.edge));
+        }
+        let (a, b) = (vertex(p, segs[0]), vertex(p, segs[0] + 1));
+        let half = 0.5 * ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2)).sqrt();
+        if !(c.sagitta.is_finite() && c.sagitta.abs() < half) {
+            return Err(format!("curved edge \"{}\": |sagitta| must be below half the chord ({half:.4})", c.edge));
+        }
+        sagitta[segs[0]] = c.sagitta;
+    }
+    let mut points = Vec::new();
+    let mut ranges = Vec::with_capacity(n);
+    for (i, &s) in sagitta.iter().enumerate() {
+        let (a, b) = (vertex(p, i), vertex(p, i + 1));
+        let start = points.len();
+        points.push(a);
+        if s != 0.0 {
+            let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+            let c = (dx * dx + dy * dy).sqrt();
+            let out = [dy / c, -dx / c];
+            let half = 0.5 * c;
+            let r = (half * half + s * s) / (2.0 * s.abs());
+            let mid = [0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1])];
+            let off = s - s.signum() * r;
+            let centre = [mid[0] + out[0] * off, mid[1] + out[1] * off];
+            let ta = (a[1] - centre[1]).atan2(a[0] - centre[0]);
+            let tb = (b[1] - centre[1]).atan2(b[0] - centre[0]);
+            let mut sweep = tb - ta;
+            while sweep > std::f64::consts::PI {
+                sweep -= std::f64::consts::TAU;
+            }
+            while sweep <= -std::f64::consts::PI {
+                sweep += std::f64::consts::TAU;
+            }
+            let k = ((r * sweep.abs()) / h).ceil().max(2.0) as usize;
+            for j in 1..k {
+                let t = ta + sweep * j as f64 / k as f64;
+                points.push([centre[0] + r * t.cos(), centre[1] + r * t.sin()]);
+            }
+        }
+        ranges.push(start..points.len());
+    }
+    Ok((points, ranges))
+}
+
+/// Pattern length of an edge span on the sampled outline (`ranges` from [`sampled_outline`]).
+pub fn span_length(p: &PanelSpec, from: usize, to: usize, points: &[[f64; 2]], ranges: &[std::ops::Range<usize>]) -> f64 {
+    let m = points.len();
     span_segments(p, from, to)
         .iter()
-        .map(|&i| {
-            let (a, b) = (vertex(p, i), vertex(p, i + 1));
+        .flat_map(|&i| ranges[i].clone())
+        .map(|k| {
+            let (a, b) = (points[k], points[(k + 1) % m]);
             ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2)).sqrt()
         })
         .sum()
@@ -136,6 +195,10 @@ impl GarmentGraph {
                     return Err(loc.at_value(&p.name, ename, format!("{field}.edges[{ename}]"), format!("panel \"{}\": edge \"{ename}\" needs two different vertices below {n}", p.name)));
                 }
             }
+            let (sampled, _) = sampled_outline(p, spec.element_size).map_err(|e| err("curves", format!("panel \"{}\": {e}", p.name)))?;
+            if self_intersection(&sampled).is_some() {
+                return Err(err("curves", format!("panel \"{}\": a curved edge makes the outline intersect itself", p.name)));
+            }
             if p.plies.is_empty() {
                 return Err(err("plies", format!("panel \"{}\" has no ply", p.name)));
             }
@@ -178,7 +241,8 @@ impl GarmentGraph {
                     }
                     used[pi].push((seg, s.name.clone()));
                 }
-                ends.push((pi, span_length(p, span.from, span.to)));
+                let (points, ranges) = sampled_outline(p, spec.element_size).map_err(|e| loc.at(Some(&p.name), Some("curves"), format!("garment.panels[{panel}].curves"), e))?;
+                ends.push((pi, span_length(p, span.from, span.to, &points, &ranges)));
             }
             let (la, lb) = (ends[0].1, ends[1].1);
             if (la - lb).abs() > spec.span_tolerance * la.max(lb) {

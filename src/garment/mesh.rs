@@ -45,21 +45,35 @@ fn convex_quad(o: &[[f64; 2]]) -> bool {
 }
 
 /// Meshes a counter-clockwise simple polygon at element size `h` (see the module doc).
-pub fn mesh_polygon(outline: &[[f64; 2]], h: f64) -> Result<PatternMesh, String> {
+/// `segments[i]`, where given, asks for that many element edges along outline segment i
+/// (rounded up to even for the triangle split; ignored by the mapped grid), so that a seam
+/// partner's node row can be matched.
+pub fn mesh_polygon(outline: &[[f64; 2]], h: f64, segments: &[Option<usize>]) -> Result<PatternMesh, String> {
     if !(h.is_finite() && h > 0.0) {
         return Err("the element size must be positive".into());
     }
     if convex_quad(outline) {
         Ok(mapped(outline, h))
     } else {
-        cdt_split(outline, h)
+        cdt_split(outline, h, segments)
     }
+}
+
+/// Element edges along each side of the mapped grid of a convex quadrilateral outline, or
+/// None when the outline gets the triangle split.
+pub fn mapped_counts(outline: &[[f64; 2]], h: f64) -> Option<[usize; 4]> {
+    if !convex_quad(outline) {
+        return None;
+    }
+    let o = outline;
+    let n_u = ((dist(o[0], o[1]).max(dist(o[3], o[2]))) / h).ceil().max(1.0) as usize;
+    let n_v = ((dist(o[1], o[2]).max(dist(o[0], o[3]))) / h).ceil().max(1.0) as usize;
+    Some([n_u, n_v, n_u, n_v])
 }
 
 /// Transfinite bilinear grid on a convex quadrilateral; opposite sides get the larger count.
 fn mapped(o: &[[f64; 2]], h: f64) -> PatternMesh {
-    let n_u = ((dist(o[0], o[1]).max(dist(o[3], o[2]))) / h).ceil().max(1.0) as usize;
-    let n_v = ((dist(o[1], o[2]).max(dist(o[0], o[3]))) / h).ceil().max(1.0) as usize;
+    let [n_u, n_v, _, _] = mapped_counts(o, h).unwrap_or([1, 1, 1, 1]);
     let id = |i: usize, j: usize| j * (n_u + 1) + i;
     let mut uv = Vec::with_capacity((n_u + 1) * (n_v + 1));
     for j in 0..=n_v {
@@ -87,14 +101,17 @@ fn mapped(o: &[[f64; 2]], h: f64) -> PatternMesh {
 }
 
 /// Constrained Delaunay triangulation with refinement, then the triangle → 3 quads split.
-fn cdt_split(o: &[[f64; 2]], h: f64) -> Result<PatternMesh, String> {
+fn cdt_split(o: &[[f64; 2]], h: f64, segments: &[Option<usize>]) -> Result<PatternMesh, String> {
     let n = o.len();
     // Boundary points: each segment in m pieces of about 2h (the split halves them).
     let mut boundary: Vec<[f64; 2]> = Vec::new();
     let mut seg_points: Vec<Vec<usize>> = Vec::with_capacity(n);
     for i in 0..n {
         let (a, b) = (o[i], o[(i + 1) % n]);
-        let m = (dist(a, b) / (2.0 * h)).ceil().max(1.0) as usize;
+        let m = match segments.get(i).copied().flatten() {
+            Some(n) => n.div_ceil(2).max(1),
+            None => (dist(a, b) / (2.0 * h)).ceil().max(1.0) as usize,
+        };
         let mut row = Vec::with_capacity(m + 1);
         for k in 0..m {
             row.push(boundary.len());
@@ -237,7 +254,7 @@ mod tests {
     #[test]
     fn split_mesh_of_an_l_shape_covers_its_area() {
         let o = [[0.0, 0.0], [2.0, 0.0], [2.0, 1.0], [1.0, 1.0], [1.0, 2.0], [0.0, 2.0]];
-        let m = mesh_polygon(&o, 0.1).unwrap();
+        let m = mesh_polygon(&o, 0.1, &[]).unwrap();
         assert_eq!(m.method, "cdt-split");
         let area: f64 = m.quads.iter().map(|q| super::super::graph::signed_area(&q.map(|i| m.uv[i]))).sum();
         assert!((area - 3.0).abs() < 1e-9, "{area}");

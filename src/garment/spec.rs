@@ -107,6 +107,9 @@ pub struct PanelSpec {
     /// Grain (warp) direction in pattern coordinates.
     #[serde(default = "warp_along_v")]
     pub grain: [f64; 2],
+    /// Curved edges: a named edge spanning one outline segment becomes a circular arc.
+    #[serde(default)]
+    pub curves: Vec<CurveSpec>,
     /// Ply stack, outermost first (names of `plies`).
     pub plies: Vec<String>,
     /// Initial placement in 3D.
@@ -116,6 +119,18 @@ pub struct PanelSpec {
 
 fn warp_along_v() -> [f64; 2] {
     [0.0, 1.0]
+}
+
+/// A curved edge: the named single-segment edge is a circular arc through its end vertices
+/// whose mid-point lies `sagitta` from the chord (positive: bulging outwards), sampled at the
+/// element size.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CurveSpec {
+    /// Edge name (one outline segment).
+    pub edge: String,
+    /// Arc height over the chord (|sagitta| < half the chord).
+    pub sagitta: f64,
 }
 
 /// One side of a seam.

@@ -222,6 +222,18 @@ impl DofMap {
         Some(self.tie_eqs[t as usize].iter().map(|&(m, w)| w * du[m]).sum())
     }
 
+    /// Equations and weights global DOF `g` maps to: its own equation (weight 1), a tied
+    /// slave's free masters, or none for a fixed DOF (a row of the transformation T).
+    pub fn expand(&self, g: usize) -> Vec<(usize, f64)> {
+        if self.eq[g] != FIXED {
+            return vec![(self.eq[g], 1.0)];
+        }
+        match self.tie_of[g] {
+            UNTIED => Vec::new(),
+            t => self.tie_eqs[t as usize].clone(),
+        }
+    }
+
     /// Folds the generalised forces of tied slaves onto their masters, f_m += w f_s (the
     /// Tᵀ f of the master–slave transformation); slave entries are kept (tie forces).
     pub fn fold(&self, f: &mut [f64]) {

@@ -34,7 +34,7 @@ use super::linear::FactorKind;
 use super::newton::{IncrementReport, Progress, SolveError, Solver, StepPlan};
 use crate::element::quadrature::{bilinear, gauss_legendre};
 use crate::element::NODE_DOFS;
-use crate::model::{Model, State, FIXED};
+use crate::model::{Model, State, FIXED, UNTIED};
 
 /// Controls of a `Dynamic` step (SI units or any consistent set; times in the model's
 /// time unit).
@@ -334,6 +334,13 @@ impl<'m> Solver<'m> {
                     r[e] += f;
                     norm2 += f * f;
                     self.values[col_ptr[e + 1] - 1] += m * c;
+                } else if self.model.dofs.tie_of[base + k] != UNTIED {
+                    // A tied slave's inertia acts through its masters (Tᵀ M T).
+                    let exp = self.model.dofs.expand(base + k);
+                    let f = m * a[k];
+                    exp.iter().for_each(|&(em, w)| r[em] += w * f);
+                    norm2 += f * f;
+                    self.assembler.pattern.add_weighted(&mut self.values, &exp, m * c);
                 }
             }
             let j = mass.rotary[n];
@@ -346,6 +353,12 @@ impl<'m> Solver<'m> {
                     r[e] += f;
                     norm2 += f * f;
                     self.values[col_ptr[e + 1] - 1] += j * c;
+                } else if self.model.dofs.tie_of[base + 3 + k] != UNTIED {
+                    let exp = self.model.dofs.expand(base + 3 + k);
+                    let f = j * t.dot(&ad);
+                    exp.iter().for_each(|&(em, w)| r[em] += w * f);
+                    norm2 += f * f;
+                    self.assembler.pattern.add_weighted(&mut self.values, &exp, j * c);
                 }
             }
         }

@@ -237,7 +237,15 @@ impl<'m> Solver<'m> {
         self.model.external_force(state, scales, &mut self.f_ext);
         if let Some(forces) = &self.nodal_forces {
             let mut jacobian = Vec::new();
-            forces.add(self.model, state, &mut self.f_ext, &mut jacobian);
+            if self.model.dofs.ties.is_empty() {
+                forces.add(self.model, state, &mut self.f_ext, &mut jacobian);
+            } else {
+                // Forces on tied slaves fold onto their masters like the other loads.
+                let mut f = vec![0.0; self.f_ext.len()];
+                forces.add(self.model, state, &mut f, &mut jacobian);
+                self.model.dofs.fold(&mut f);
+                self.f_ext.iter_mut().zip(&f).for_each(|(e, v)| *e += v);
+            }
             if tangent {
                 let p = &self.assembler.pattern;
                 for (n, j) in &jacobian {

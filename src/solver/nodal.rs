@@ -5,7 +5,7 @@
 use nalgebra::Matrix3;
 
 use crate::element::NODE_DOFS;
-use crate::model::{Model, State, FIXED};
+use crate::model::{Model, State};
 
 /// Forces on node translations that depend on the current configuration.
 pub trait NodalForces: Send + Sync {
@@ -18,20 +18,20 @@ pub trait NodalForces: Send + Sync {
 
 /// Adds −½(J + Jᵀ) of node `n`'s translations to the upper-triangular CSC tangent `values`.
 pub(super) fn add_node_block(model: &Model, col_ptr: &[usize], row_idx: &[usize], values: &mut [f64], n: usize, j: &Matrix3<f64>) {
-    let eq = &model.dofs.eq;
+    // Through the tie transformation (Tᵀ J T) when the node is a tied slave.
+    let expanded: [Vec<(usize, f64)>; 3] = std::array::from_fn(|a| model.dofs.expand(NODE_DOFS * n + a));
     for b in 0..3 {
-        let c = eq[NODE_DOFS * n + b];
-        if c == FIXED {
-            continue;
-        }
-        for a in 0..3 {
-            let r = eq[NODE_DOFS * n + a];
-            if r == FIXED || r > c {
-                continue;
-            }
-            let rows = &row_idx[col_ptr[c]..col_ptr[c + 1]];
-            if let Ok(p) = rows.binary_search(&r) {
-                values[col_ptr[c] + p] -= 0.5 * (j[(a, b)] + j[(b, a)]);
+        for &(c, wc) in &expanded[b] {
+            for a in 0..3 {
+                for &(r, wr) in &expanded[a] {
+                    if r > c {
+                        continue;
+                    }
+                    let rows = &row_idx[col_ptr[c]..col_ptr[c + 1]];
+                    if let Ok(p) = rows.binary_search(&r) {
+                        values[col_ptr[c] + p] -= 0.5 * wr * wc * (j[(a, b)] + j[(b, a)]);
+                    }
+                }
             }
         }
     }
