@@ -836,6 +836,21 @@ mod tests {
         }
     }
 
+    /// A free, distorted and warped MITC4 element with non-parallel directors keeps exactly
+    /// the six rigid-body zero-energy modes (Dvorkin & Bathe 1984) with the centre-sampled
+    /// in-plane shear and the geodesic director gradients.
+    #[test]
+    fn free_warped_element_has_six_zero_energy_modes() {
+        let (x0, d0) = geometry();
+        let sec = section(ShearTreatment::Mitc4, false);
+        let el = ShellElement { x0, d0, grain: None, section: &sec };
+        let k = el.response(&[Vector3::zeros(); 4], &frames(&d0), true).unwrap().stiffness.unwrap();
+        let eig = nalgebra::DMatrix::from_fn(20, 20, |i, j| k[(i, j)]).symmetric_eigen();
+        let max = eig.eigenvalues.iter().fold(0.0f64, |a, b| a.max(b.abs()));
+        let zero = eig.eigenvalues.iter().filter(|v| v.abs() < 1e-10 * max).count();
+        assert_eq!(zero, 6, "eigenvalues {:?}", eig.eigenvalues.as_slice());
+    }
+
     #[test]
     fn tangent_matches_central_differences_of_residual() {
         let (x0, d0) = geometry();
