@@ -282,7 +282,7 @@ impl<'a> ShellElement<'a> {
         for (xi, eta, zeta, w) in self.points()? {
             let pg = self.point_geometry(xi, eta, zeta, w)?;
             let (eps, b, pq) = self.strain(&pg, u, frames, true);
-            let r = self.section.material.response(&eps).map_err(ElementFailure::Material)?;
+            let r = self.section.material.response_at(&eps, zeta).map_err(ElementFailure::Material)?;
             energy += pg.wdet * r.energy;
             force += b.transpose() * (r.stress * pg.wdet);
             if let Some(k) = k.as_mut() {

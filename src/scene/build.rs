@@ -10,7 +10,7 @@ use super::error::{Locator, SceneError};
 use super::spec::*;
 use crate::element::quadrature::{bilinear, gauss_legendre};
 use crate::element::{DirectorFrame, Section, NODE_DOFS};
-use crate::material::{bulk_shear_from_young_poisson, NeoHookean, ShellMaterial, StVenantKirchhoff};
+use crate::material::{bulk_shear_from_young_poisson, Fabric, NeoHookean, ShellMaterial, StVenantKirchhoff};
 use crate::mesh::{self, MeshQuality, ShellMesh};
 use crate::model::{DofMap, ElementDef, Load, LoadKind, Model, PartInfo};
 use crate::solver::StepPlan;
@@ -82,6 +82,10 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
                 }
                 Arc::new(NeoHookean::new(bulk, shear))
             }
+            MaterialSpec::Fabric(ref f) => {
+                let props = super::fabric_spec::fabric_properties(f).map_err(|(key, msg)| bad(key, &msg))?;
+                Arc::new(Fabric::new(props))
+            }
         };
         materials.insert(name.as_str(), m);
     }
@@ -122,11 +126,23 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
         if !(1..=5).contains(&p.thickness_points) {
             return Err(loc.at(Some(&p.name), Some("thickness_points"), format!("{field}.thickness_points"), "expected 1 to 5 Gauss points"));
         }
+        if let Some(t) = material.intrinsic_thickness()
+            && (p.thickness - t).abs() > 1e-9 * t
+        {
+            return Err(loc.at(
+                Some(&p.name),
+                Some("thickness"),
+                format!("{field}.thickness"),
+                format!("material \"{}\" is a sheet of thickness {t}; the part's thickness must equal it, found {}", p.material, p.thickness),
+            ));
+        }
+        // Materials with a through-thickness law (fabric) fix their own rule.
+        let thickness_points = material.thickness_points().unwrap_or(p.thickness_points);
         let m = make_mesh(&p.mesh, base_dir).map_err(|e| loc.at(Some(&p.name), Some("mesh"), format!("{field}.mesh"), e.to_string()))?;
         quality.push((p.name.clone(), m.quality()));
         let first_node = x0.len();
         let first_element = elements.len();
-        sections.push(Section { thickness: p.thickness, shear: p.shear, thickness_points: p.thickness_points, material });
+        sections.push(Section { thickness: p.thickness, shear: p.shear, thickness_points, material });
         let grain = p.grain.map(v3);
         for q in &m.quads {
             elements.push(ElementDef { nodes: q.map(|n| n + first_node), section: pi, part: pi, grain });
@@ -304,6 +320,14 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
                     return Err(loc.at(Some(name), Some("areal_density"), format!("{field}.areal_density"), "expected a non-negative mass per area"));
                 }
                 let w = v3(*g) * *areal_density;
+                LoadKind::Forces(area_weights(&x0, &elements, &parts[k]).into_iter().map(|(n, a)| (n, w * a)).collect())
+            }
+            LoadSpec::SelfWeight { part, g } => {
+                let k = part_of(part)?;
+                let Some(rho) = sections[k].material.areal_density() else {
+                    return Err(loc.at(Some(name), Some("part"), format!("{field}.part"), "the part's material has no areal density (use Gravity with areal_density)"));
+                };
+                let w = v3(*g) * rho;
                 LoadKind::Forces(area_weights(&x0, &elements, &parts[k]).into_iter().map(|(n, a)| (n, w * a)).collect())
             }
             LoadSpec::Displacement { set, dof, value } => {

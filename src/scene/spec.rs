@@ -58,6 +58,39 @@ pub enum MaterialSpec {
     NeoHookean { young: f64, poisson: f64 },
     /// Ciarlet compressible neo-Hookean from bulk modulus K and shear modulus μ.
     NeoHookeanBulkShear { bulk: f64, shear: f64 },
+    /// Orthotropic fabric (warp = the part's grain), from a named preset and/or explicit
+    /// sheet constants (explicit values override the preset's).
+    Fabric(FabricSpec),
+}
+
+/// Sheet constants of a fabric (SI units); every field optional when `preset` is given.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct FabricSpec {
+    /// Preset name: light_cotton, cotton_broadcloth, polyester_faille, ripstop, knit_liner.
+    pub preset: Option<String>,
+    /// Warp tensile stiffness, N/m.
+    pub warp_tensile: Option<f64>,
+    /// Weft tensile stiffness, N/m.
+    pub weft_tensile: Option<f64>,
+    /// In-plane shear stiffness, N/m.
+    pub shear: Option<f64>,
+    /// Poisson coupling ν12.
+    pub poisson: Option<f64>,
+    /// Warp bending rigidity, N·m.
+    pub warp_bending: Option<f64>,
+    /// Weft bending rigidity, N·m.
+    pub weft_bending: Option<f64>,
+    /// Twisting rigidity, N·m (default ½√(B1·B2)).
+    pub twist_bending: Option<f64>,
+    /// Transverse shear stiffness, N/m (default the larger tensile stiffness).
+    pub transverse_shear: Option<f64>,
+    /// Areal density, kg/m².
+    pub areal_density: Option<f64>,
+    /// Thickness, m (the part's thickness must equal it).
+    pub thickness: Option<f64>,
+    /// Tension stiffening (strain, factor) table, strains ascending from 0.
+    pub tension_table: Option<Vec<(f64, f64)>>,
 }
 
 fn five_sixths() -> f64 {
@@ -187,6 +220,8 @@ pub enum LoadSpec {
     Gravity { part: String, areal_density: f64, g: [f64; 3] },
     /// Prescribed translation of the set's nodes.
     Displacement { set: String, dof: Dof, value: f64 },
+    /// Self-weight of a part from its material's areal density (fabric) and gravity vector.
+    SelfWeight { part: String, g: [f64; 3] },
 }
 
 /// A solution step: load scales ramped linearly over its increments.
