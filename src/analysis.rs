@@ -45,6 +45,12 @@ pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &m
     let t0 = Instant::now();
     let model = &built.model;
     let mut solver = Solver::new(model, scene.solver.clone()).map_err(RunError::Setup)?;
+    if let Some(c) = &built.contact {
+        solver.add_contribution(Box::new(crate::contact::ContactSet::new(model, c.bodies.clone(), &c.parts, &c.settings)));
+        if let Some(k) = c.stabilization {
+            solver.add_contribution(Box::new(crate::contact::Stabilization::new(model, k)));
+        }
+    }
     let (dofs, tangent_nnz, factor_nnz) = solver.sizes();
     let mut summary = Summary {
         scene: scene.name.clone(),
@@ -56,7 +62,7 @@ pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &m
     if let Some(dir) = &options.out_dir {
         std::fs::create_dir_all(dir).map_err(|e| RunError::Io(format!("{}: {e}", dir.display())))?;
     }
-    let export = ExportOptions { binary: scene.output.binary };
+    let export = ExportOptions { binary: scene.output.binary, ..Default::default() };
     let mut pvd_entries: Vec<(f64, String)> = Vec::new();
     let mut export_s = 0.0;
     let mut io_error: Option<String> = None;
@@ -66,7 +72,7 @@ pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &m
     let result = solver.run(
         steps,
         &mut state,
-        &mut |report, st, _| {
+        &mut |report, st, sol| {
             for (h, m) in summary.monitors.iter_mut().zip(&built.monitors) {
                 h.record(m, model, st);
             }
@@ -75,6 +81,8 @@ pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &m
             if let (Some(dir), true) = (&options.out_dir, scene.output.vtu && (report.increment % every == 0 || last_of_step)) {
                 let t = Instant::now();
                 let name = format!("{}_{:04}.vtu", scene.name, pvd_entries.len() + 1);
+                let mut export = export.clone();
+                export.extra_point_data = sol.contributions().iter().flat_map(|c| c.point_data(model, st)).collect();
                 match write_state_vtu(&dir.join(&name), model, st, &export) {
                     Ok(()) => pvd_entries.push((report.time, name)),
                     Err(e) => io_error = io_error.take().or(Some(e.to_string())),
@@ -86,6 +94,9 @@ pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &m
         progress,
     );
     summary.timings = solver.timings.clone();
+    if let Some(c) = &built.contact {
+        crate::contact::summarize(scene, c, model, &state, solver.contributions(), &mut summary.extra);
+    }
     if let Some(e) = io_error {
         return Err(RunError::Io(e));
     }

@@ -28,3 +28,4 @@ pub mod analysis;
 pub mod io;
 pub mod results;
 pub mod bench;
+pub mod contact;

@@ -94,6 +94,9 @@ pub struct Summary {
     pub peak_memory_mib: Option<f64>,
     /// Files written (relative to the output directory).
     pub files: Vec<String>,
+    /// Sections of optional features (contact, stabilization, drape), by name.
+    #[serde(flatten)]
+    pub extra: std::collections::BTreeMap<String, serde_json::Value>,
 }
 
 /// Peak resident set size of this process in MiB (Linux `VmHWM`).

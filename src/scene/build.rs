@@ -39,6 +39,8 @@ pub struct BuiltScene {
     pub node_sets: BTreeMap<String, Vec<usize>>,
     /// Mesh quality per part.
     pub quality: Vec<(String, MeshQuality)>,
+    /// Rigid bodies and contact controls.
+    pub contact: Option<crate::contact::ContactSetup>,
 }
 
 fn v3(a: [f64; 3]) -> Vector3<f64> {
@@ -391,9 +393,13 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
         monitors.push(Monitor { name: m.name.clone(), node, dofs: m.dofs.clone() });
     }
 
+    let contact = match &scene.contact {
+        Some(c) => Some(crate::contact::build_contact(c, &loc, base_dir, &parts)?),
+        None => None,
+    };
     let dofs = DofMap::new(&fixed);
     let model = Model { x0, frames0, elements, sections, parts, dofs, loads };
-    Ok(BuiltScene { model, steps, monitors, node_sets, quality })
+    Ok(BuiltScene { model, steps, monitors, node_sets, quality, contact })
 }
 
 fn check_young_poisson(young: f64, poisson: f64, bad: &dyn Fn(&str, &str) -> SceneError) -> Result<(), SceneError> {

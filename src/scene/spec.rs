@@ -40,6 +40,91 @@ pub struct Scene {
     /// Solver controls.
     #[serde(default)]
     pub solver: SolverSettings,
+    /// Contact with rigid bodies.
+    #[serde(default)]
+    pub contact: Option<ContactSpec>,
+    /// Drape measures to report (Cusick drape coefficient, folds, penetration).
+    #[serde(default)]
+    pub drape: Option<DrapeSpec>,
+}
+
+/// Rigid bodies the shell parts touch, and the contact controls.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ContactSpec {
+    /// The rigid bodies.
+    pub bodies: Vec<BodySpec>,
+    /// Parts whose nodes take part (default: all).
+    #[serde(default)]
+    pub parts: Vec<String>,
+    /// Factor c of the automatic nodal penalty k = c·A·a/ℓ² (A membrane stiffness).
+    #[serde(default = "one")]
+    pub penalty_factor: f64,
+    /// Explicit nodal normal penalty (N/m), overriding the automatic one.
+    #[serde(default)]
+    pub penalty: Option<f64>,
+    /// Tangential (stick) penalty as a fraction of the normal one.
+    #[serde(default = "one")]
+    pub tangential_factor: f64,
+    /// Viscous pseudo-time stabilization coefficient c (N/m³): force c·a·(u − u_prev).
+    #[serde(default)]
+    pub stabilization: Option<f64>,
+}
+
+fn one() -> f64 {
+    1.0
+}
+
+/// A rigid body: shape in its local frame, placed by a rotation then a translation.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BodySpec {
+    /// Body name.
+    pub name: String,
+    /// Geometry (local frame).
+    pub shape: ShapeSpec,
+    /// Translation of the local origin.
+    #[serde(default)]
+    pub translation: [f64; 3],
+    /// Rotation vector (axis × angle in degrees) applied before the translation.
+    #[serde(default)]
+    pub rotation: [f64; 3],
+    /// Static Coulomb friction coefficient.
+    #[serde(default)]
+    pub friction: f64,
+    /// Kinetic coefficient (default: equal to `friction`).
+    #[serde(default)]
+    pub kinetic_friction: Option<f64>,
+}
+
+/// Rigid-body shapes. Cylinder and capsule axes are the local z axis; the plane is z = 0
+/// with its outward side +z.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum ShapeSpec {
+    Plane,
+    Sphere { radius: f64 },
+    Box { half_extents: [f64; 3] },
+    Cylinder { radius: f64, height: f64 },
+    Capsule { radius: f64, height: f64 },
+    /// Triangle mesh from OBJ or STL (ASCII or binary), path relative to the scene file.
+    TriMesh { path: String, #[serde(default = "one")] scale: f64 },
+}
+
+/// Drape measures: the Cusick drape coefficient and fold count about a vertical axis
+/// through `center`.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DrapeSpec {
+    /// Centre of the support disc (its axis is vertical, z).
+    pub center: [f64; 3],
+    /// Support disc radius.
+    pub disc_radius: f64,
+    /// Undeformed specimen radius.
+    pub specimen_radius: f64,
+    /// Raster cell size for the shadow area (default specimen_radius/1000).
+    #[serde(default)]
+    pub resolution: Option<f64>,
 }
 
 /// A material model and its constants.

@@ -1,5 +1,6 @@
 //! Nonlinear solution: load stepping with Newton–Raphson, line search and cut-back.
 
+pub mod extra;
 pub mod linear;
 pub mod newton;
 

@@ -41,6 +41,12 @@ pub struct Timings {
     pub solve: f64,
     /// Symbolic analysis (once).
     pub analysis: f64,
+    /// Extra contributions (contact, stabilization), including their proximity search.
+    #[serde(default)]
+    pub contact: f64,
+    /// Proximity search of the contact contributions (part of `contact`).
+    #[serde(default)]
+    pub contact_search: f64,
 }
 
 /// A converged nominal increment.
@@ -66,6 +72,9 @@ pub struct IncrementReport {
     pub indefinite_tangent: bool,
     /// Strain energy.
     pub energy: f64,
+    /// Reports of the extra contributions for this increment (e.g. contact active set).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub extra: Vec<serde_json::Value>,
 }
 
 /// Progress notification for a bar.
@@ -136,6 +145,10 @@ pub struct Solver<'m> {
     f_ext: Vec<f64>,
     /// Accumulated wall-time split.
     pub timings: Timings,
+    /// Extra force/tangent terms added after element assembly.
+    extras: Vec<Box<dyn super::extra::Contribution + 'm>>,
+    /// Reports of the extras since the last nominal increment.
+    extra_reports: Vec<serde_json::Value>,
 }
 
 impl<'m> Solver<'m> {
@@ -156,7 +169,19 @@ impl<'m> Solver<'m> {
             f_int: vec![0.0; ndof],
             f_ext: vec![0.0; ndof],
             timings,
+            extras: Vec::new(),
+            extra_reports: Vec::new(),
         })
+    }
+
+    /// Adds a force/tangent contribution (contact, stabilization) to every assembly.
+    pub fn add_contribution(&mut self, c: Box<dyn super::extra::Contribution + 'm>) {
+        self.extras.push(c);
+    }
+
+    /// The extra contributions.
+    pub fn contributions(&self) -> &[Box<dyn super::extra::Contribution + 'm>] {
+        &self.extras
     }
 
     /// Equations, stored tangent entries (upper triangle) and factor entries.
@@ -195,6 +220,14 @@ impl<'m> Solver<'m> {
             if tangent { Some(&mut self.values) } else { None },
         )?;
         self.timings.assembly += info.seconds;
+        if !self.extras.is_empty() {
+            let t = Instant::now();
+            for c in self.extras.iter_mut() {
+                c.add(self.model, state, &self.assembler.pattern, &mut self.f_int, if tangent { Some(&mut self.values) } else { None });
+            }
+            self.timings.contact += t.elapsed().as_secs_f64();
+            self.timings.contact_search = self.extras.iter().map(|c| c.search_seconds()).sum();
+        }
         self.model.external_force(state, scales, &mut self.f_ext);
         Ok(info.energy)
     }
@@ -367,6 +400,11 @@ impl<'m> Solver<'m> {
                             indefinite |= ind;
                             tau = next;
                             scales = trial_scales;
+                            for c in self.extras.iter_mut() {
+                                if let Some(r) = c.commit(self.model, state) {
+                                    self.extra_reports.push(r);
+                                }
+                            }
                             if its <= 6 && cutback_level > 0 {
                                 cutback_level -= 1;
                                 dtau *= 2.0;
@@ -384,6 +422,7 @@ impl<'m> Solver<'m> {
                                     cutbacks,
                                     indefinite_tangent: indefinite,
                                     energy,
+                                    extra: std::mem::take(&mut self.extra_reports),
                                 };
                                 on_increment(&report, state, self);
                                 break;
