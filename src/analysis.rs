@@ -46,10 +46,7 @@ pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &m
     let model = &built.model;
     let mut solver = Solver::new(model, scene.solver.clone()).map_err(RunError::Setup)?;
     if let Some(c) = &built.contact {
-        solver.add_contribution(Box::new(crate::contact::ContactSet::new(model, c.bodies.clone(), &c.parts, &c.settings)));
-        if let Some(k) = c.stabilization {
-            solver.add_contribution(Box::new(crate::contact::Stabilization::new(model, k)));
-        }
+        crate::contact::attach(&mut solver, model, c);
     }
     let (dofs, tangent_nnz, factor_nnz) = solver.sizes();
     let mut summary = Summary {

@@ -40,11 +40,7 @@ fn solve(text: &str) -> (BuiltScene, State, Vec<IncrementReport>) {
     let mut reports = Vec::new();
     let state = {
         let mut solver = Solver::new(&built.model, sc.solver.clone()).expect("solver");
-        let c = built.contact.as_ref().expect("contact");
-        solver.add_contribution(Box::new(plyshell::contact::ContactSet::new(&built.model, c.bodies.clone(), &c.parts, &c.settings)));
-        if let Some(k) = c.stabilization {
-            solver.add_contribution(Box::new(plyshell::contact::Stabilization::new(&built.model, k)));
-        }
+        plyshell::contact::attach(&mut solver, &built.model, built.contact.as_ref().expect("contact"));
         let mut state = built.model.initial_state();
         solver.run(&built.steps, &mut state, &mut |r, _, _| reports.push(r.clone()), &mut |_| {}).expect("solve");
         state
@@ -162,7 +158,8 @@ fn sphere_obj(r: f64, center: [f64; 3], nu: usize, nv: usize) -> String {
 }
 
 /// Drape scene: a `n`×`n` square of light cotton, side 0.3 m, centred over a body whose top
-/// is at z = 0, under gravity with stabilization; returns the final state and built scene.
+/// is at z = 0, falling under gravity (backward-Euler pseudo-dynamics, Δt = 1.5 ms, `increments`
+/// steps after the first); returns the built scene, final state and increment reports.
 fn drape_over(body: &str, n: usize, increments: usize) -> (BuiltScene, State, Vec<IncrementReport>) {
     let p = FabricProperties::preset("light_cotton").expect("preset");
     let z = 0.5 * p.thickness;
@@ -172,8 +169,8 @@ fn drape_over(body: &str, n: usize, increments: usize) -> (BuiltScene, State, Ve
          node_sets: {{\"centre\": Nearest(point: (0.15, 0.15, 0.0))}},
          boundary: [Fix(set: \"centre\", dofs: [Ux, Uy])],
          loads: {{\"weight\": SelfWeight(part: \"cloth\", g: (0.0, 0.0, -{G}))}},
-         steps: [(name: \"drape\", increments: {increments}, scale: {{\"weight\": 1.0}}), (name: \"settle\", increments: 10)],
-         contact: Some((bodies: [{body}], stabilization: Some(2.0e2))),
+         steps: [(name: \"drape\", increments: 1, scale: {{\"weight\": 1.0}}), (name: \"fall\", increments: {increments})],
+         contact: Some((bodies: [{body}], dynamics: Some((time_step: 1.5e-3, damping: 20.0)))),
          output: (vtu: false))",
         h = p.thickness
     );
@@ -186,7 +183,8 @@ fn sphere_penetration(built: &BuiltScene, st: &State, c: Vector3<f64>, r: f64, h
     (0..built.model.n_nodes()).map(|a| 0.5 * h - ((built.model.position(st, a) - c).norm() - r)).fold(0.0, f64::max)
 }
 
-/// Cloth draped over a sphere (R = 0.08 m) and over the same sphere as a triangle mesh:
+/// Cloth draped (frictionless) over a sphere (R = 0.08 m) and over the same sphere as a
+/// triangle mesh, 0.18 s of fall:
 /// the largest penetration of the shell face, by an independent parry3d distance query
 /// (a TriMesh built here, and the analytic sphere), stays below 5 % of the thickness.
 #[test]
@@ -195,8 +193,8 @@ fn cloth_over_sphere_and_trimesh_does_not_penetrate() {
     let h = p.thickness;
     let r = 0.08;
     let c = Vector3::new(0.15, 0.15, -r - 0.5 * h);
-    let body = format!("(name: \"ball\", shape: Sphere(radius: {r}), translation: ({}, {}, {:.12e}), friction: 0.3)", c.x, c.y, c.z);
-    let (built, st, summary) = drape_over(&body, 16, 10);
+    let body = format!("(name: \"ball\", shape: Sphere(radius: {r}), translation: ({}, {}, {:.12e}))", c.x, c.y, c.z);
+    let (built, st, summary) = drape_over(&body, 12, 120);
     let pen = sphere_penetration(&built, &st, c, r, h);
     let sag = (0..built.model.n_nodes()).map(|a| -st.u[a].z).fold(0.0, f64::max);
     println!("sphere: penetration {pen:.3e} m ({:.3} % of h), max sag {sag:.4} m, iterations {}", 100.0 * pen / h, summary.iter().map(|r| r.iterations).sum::<usize>());
@@ -207,8 +205,8 @@ fn cloth_over_sphere_and_trimesh_does_not_penetrate() {
     let obj = sphere_obj(r, [0.0, 0.0, 0.0], 48, 24);
     let path = data_dir().join("uv_sphere.obj");
     std::fs::write(&path, &obj).expect("write obj");
-    let body = format!("(name: \"mesh\", shape: TriMesh(path: \"uv_sphere.obj\"), translation: ({}, {}, {:.12e}), friction: 0.3)", c.x, c.y, c.z);
-    let (built, st, summary) = drape_over(&body, 16, 10);
+    let body = format!("(name: \"mesh\", shape: TriMesh(path: \"uv_sphere.obj\"), translation: ({}, {}, {:.12e}))", c.x, c.y, c.z);
+    let (built, st, summary) = drape_over(&body, 12, 120);
     let soup = plyshell::contact::trimesh_io::parse_obj(&obj).expect("obj");
     let mesh = TriMesh::with_flags(
         soup.vertices.iter().map(|v| PVec::new(v.x + c.x, v.y + c.y, v.z + c.z)).collect(),

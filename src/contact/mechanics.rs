@@ -8,20 +8,19 @@
 //! touches the body). Normal: λ = k_n⟨−g⟩, internal force k_n g n, tangent
 //! k_n (n nᵀ + g ∇n) with ∇n the Hessian of the signed distance (analytic for the sphere
 //! and the plane, central differences of the projected normal otherwise).
-//! Friction: elastic-slip regularisation with tangential penalty k_t from an anchor point
-//! (the node's position when it stuck): trial t = −k_t s, s = (I − nnᵀ)(x − x̂); stick if
-//! |t| ≤ μ λ, otherwise slide with |t| = μ_k λ. μ is the static coefficient unless the node
-//! slid in the previous increment (then kinetic). The exact slide tangent
-//! μ_k λ/|s| (I − ŝŝᵀ)(I − nnᵀ) − μ_k k_n ŝ nᵀ is unsymmetric. For the symmetric
-//! factorization the coupling term −μ_k k_n ŝ nᵀ (friction change from a normal motion) is
-//! left out rather than symmetrised: symmetrising it puts ½μ_k k_n ŝ into the normal row,
-//! so a large slide step produces a spurious normal force of order μ_k k_n·slide that lifts
-//! the node off (measured: Newton then cycles between contact and separation). Without
-//! it the iteration is a quasi-Newton one while nodes slide (linear convergence, exact
-//! residual); the stick tangent is exact for a plane. Anchors move only when an increment
-//! converges (return mapping x̂ ← x − (μ_k λ/k_t) ŝ), so the friction law is
-//! path-dependent across increments and exact within one.
-//!
+//! Friction: regularised Coulomb law measured from an anchor point x̂ (where the node
+//! stuck): s = (I − nnᵀ)(x − x̂), t = −μλ tanh(k_t|s|/(μλ)) ŝ — the elastic-slip penalty
+//! k_t for small s, saturating smoothly at the Coulomb limit μλ (a hard stick/slip switch
+//! made Newton cycle between the two branches on drapes). μ is the static coefficient unless
+//! the pair slid in the previous increment (then kinetic). Tangent (consistent for fixed λ
+//! and n): [k_t sech²(·) ŝŝᵀ + μλ tanh(·)/|s| (I − ŝŝᵀ)](I − nnᵀ), symmetrised. The
+//! unsymmetric coupling −μ tanh(·) k_n ŝ nᵀ (friction change from a normal motion) is left
+//! out rather than symmetrised: symmetrising puts ½μk_n ŝ into the normal row, so a long
+//! slide step produces a spurious normal force of order μk_n·slide that lifts the node off
+//! (measured: Newton then cycles between contact and separation). Without it the iteration
+//! is quasi-Newton while nodes slide (linear convergence, exact residual). A pair counts as
+//! sliding when k_t|s| > 2μλ; on convergence its anchor is dragged to trail the node by
+//! 2μ_kλ/k_t (return mapping), so friction is path-dependent across increments.
 //! Penalty: k_n = c·A·a/ℓ² per node, with A the membrane stiffness (N/m) of the stiffest
 //! section at the node (E·h, or the fabric's larger tensile stiffness), a the node's
 //! tributary area and ℓ² the mean area of its elements (so a uniform pressure p penetrates
@@ -38,6 +37,10 @@ use crate::assembly::Pattern;
 use crate::element::NODE_DOFS;
 use crate::model::{Model, State, FIXED};
 use crate::solver::extra::{slot, Contribution};
+
+/// A pair counts as sliding (and its anchor is dragged along on commit) when k_t|s| > 2μλ,
+/// i.e. the regularised friction force exceeds tanh 2 = 96 % of μλ.
+const SLIDE_ARG: f64 = 2.0;
 
 /// Contact controls.
 #[derive(Clone, Debug)]
@@ -197,29 +200,29 @@ impl ContactSet {
                     }
                     let hist = self.history[i * nb + b];
                     let mut ev = PairEval { gap: g, lambda, active: true, ..Default::default() };
-                    let mu_limit = if hist.sliding { body.mu_kinetic } else { body.mu_static };
-                    if mu_limit > 0.0 || body.mu_kinetic > 0.0 {
+                    // Saturation level: static unless the pair slid in the last increment.
+                    let mu = if hist.sliding { body.mu_kinetic } else { body.mu_static };
+                    if mu > 0.0 {
                         let anchor = hist.anchor.unwrap_or(self.committed_x[i]);
                         let p = Matrix3::identity() - n * n.transpose();
                         let s = p * (x - anchor);
                         let sn = s.norm();
-                        if kt * sn <= mu_limit * lambda || sn == 0.0 {
-                            // Stick: elastic tangential spring.
-                            f += s * kt;
-                            ev.tangential = -s * kt;
-                            if with_tangent {
-                                kk += p * kt;
-                            }
-                        } else {
+                        let cap = mu * lambda;
+                        let arg = kt * sn / cap;
+                        if sn > 0.0 {
                             let sh = s / sn;
-                            let mu = body.mu_kinetic;
-                            f += sh * (mu * lambda);
-                            ev.tangential = -sh * (mu * lambda);
-                            ev.sliding = true;
+                            // Smooth Coulomb law t = −μλ tanh(k_t|s|/(μλ)) ŝ.
+                            let th = arg.tanh();
+                            f += sh * (cap * th);
+                            ev.tangential = -sh * (cap * th);
+                            ev.sliding = arg > SLIDE_ARG;
                             if with_tangent {
-                                // The unsymmetric coupling −μ_k k ŝ nᵀ is left out (see the module doc).
-                                kk += (Matrix3::identity() - sh * sh.transpose()) * p * (mu * lambda / sn);
+                                let along = kt * (1.0 - th * th);
+                                let across = cap * th / sn;
+                                kk += (sh * sh.transpose() * along + (Matrix3::identity() - sh * sh.transpose()) * across) * p;
                             }
+                        } else if with_tangent {
+                            kk += p * kt;
                         }
                     }
                     evals[b] = ev;
@@ -296,8 +299,13 @@ impl Contribution for ContactSet {
         let nb = self.bodies.len();
         for (i, (f, _, ev)) in out.iter().enumerate() {
             let a = self.nodes[i];
+            // A Newton step that carries a free node from above a body to below its surface
+            // (mid-surface through the body) would be answered by a huge penalty force and
+            // the iteration would chatter between contact and separation: reject the trial
+            // state so the step is shortened instead.
+            let through = ev.iter().any(|e| e.active && -e.gap > self.offset[i]);
             for k in 0..3 {
-                f_int[NODE_DOFS * a + k] += f[k];
+                f_int[NODE_DOFS * a + k] += if through { f64::NAN } else { f[k] };
             }
             self.last[i * nb..(i + 1) * nb].copy_from_slice(ev);
         }
@@ -335,9 +343,12 @@ impl Contribution for ContactSet {
                     let anchor = h.anchor.unwrap_or(self.committed_x[i]);
                     if ev.sliding {
                         rep.sliding += 1;
-                        // Return mapping: the anchor trails the node by the elastic slip.
+                        // Return mapping: the anchor trails the node by the slip at which the
+                        // regularised force reaches tanh 2 of μλ.
                         let kt = self.tangential_factor * self.k_normal[i];
-                        let new_anchor = x + ev.tangential / kt;
+                        let t = ev.tangential.norm();
+                        let lag = SLIDE_ARG * self.bodies[b].mu_kinetic * ev.lambda / kt;
+                        let new_anchor = if t > 0.0 { x + ev.tangential * (lag / t) } else { x };
                         h.slip += (new_anchor - anchor).norm();
                         h.anchor = Some(new_anchor);
                     } else {

@@ -11,7 +11,9 @@ use crate::model::{Model, State};
 /// A force/tangent term the solver adds to every assembly.
 pub trait Contribution: Send {
     /// Adds the term's internal force (all DOFs, global numbering) to `f_int` and, when
-    /// `values` is given, its tangent to the upper-triangle values of `pattern`.
+    /// `values` is given, its tangent to the upper-triangle values of `pattern`. A term that
+    /// finds the trial state inadmissible (e.g. a node through a body) writes NaN into
+    /// `f_int`; the solver's safeguarded step then backtracks (halves the step).
     fn add(&mut self, model: &Model, state: &State, pattern: &Pattern, f_int: &mut [f64], values: Option<&mut [f64]>);
     /// Called once per converged (sub-)increment with the converged state; returns a report
     /// for the increment (e.g. active-set changes), if any.
