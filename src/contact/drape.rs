@@ -35,11 +35,19 @@ pub struct DrapeReport {
 
 /// Area of the vertical (xy) projection of the deformed mid-surface: every quad is split
 /// into two triangles and a square raster of cell `res` about `center` is marked where the
-/// cell centre falls in a projected triangle. The error is O(perimeter·res).
-pub fn shadow_area(model: &Model, state: &State, center: &Vector3<f64>, extent: f64, res: f64) -> f64 {
+/// cell centre falls in a projected triangle or in the support disc of radius `disc_radius`
+/// (the apparatus' shadow includes the disc, so a specimen's central hole hidden on the disc
+/// does not count as a gap). The error is O(perimeter·res).
+pub fn shadow_area(model: &Model, state: &State, center: &Vector3<f64>, extent: f64, res: f64, disc_radius: f64) -> f64 {
     let n = (2.0 * extent / res).ceil() as usize;
     let origin = (center.x - extent, center.y - extent);
     let mut covered = vec![false; n * n];
+    for j in 0..n {
+        for i in 0..n {
+            let (px, py) = (origin.0 + (i as f64 + 0.5) * res - center.x, origin.1 + (j as f64 + 0.5) * res - center.y);
+            covered[j * n + i] = px * px + py * py <= disc_radius * disc_radius;
+        }
+    }
     let pos: Vec<Vector3<f64>> = (0..model.n_nodes()).map(|a| model.position(state, a)).collect();
     for el in &model.elements {
         let q = el.nodes.map(|a| pos[a]);
@@ -142,7 +150,7 @@ pub fn folds(model: &Model, state: &State, center: &Vector3<f64>, specimen_radiu
 /// radius `disc_radius` centred at `center`, raster cell `res`.
 pub fn drape_report(model: &Model, state: &State, center: &Vector3<f64>, disc_radius: f64, specimen_radius: f64, res: f64, max_penetration: f64) -> DrapeReport {
     let pi = std::f64::consts::PI;
-    let shadow = shadow_area(model, state, center, 1.05 * specimen_radius, res);
+    let shadow = shadow_area(model, state, center, 1.05 * specimen_radius, res, disc_radius);
     let disc = pi * disc_radius * disc_radius;
     let spec = pi * specimen_radius * specimen_radius;
     let (folds, harmonic, range) = folds(model, state, center, specimen_radius);

@@ -423,6 +423,7 @@ fn make_mesh(spec: &MeshSpec, base_dir: &Path) -> Result<ShellMesh, mesh::MeshEr
             mesh::hemisphere(radius, rad(hole_angle), rad(phi0), rad(phi1), n_merid, n_circ)
         }
         MeshSpec::SlitAnnulus { ri, ro, nr, ntheta } => mesh::slit_annulus(ri, ro, nr, ntheta),
+        MeshSpec::Annulus { ri, ro, nr, ntheta, graded } => mesh::annulus(ri, ro, nr, ntheta, graded),
         MeshSpec::TwistedStrip { length, width, twist, nx, ny } => mesh::twisted_strip(length, width, rad(twist), nx, ny),
         MeshSpec::Obj { ref path } => mesh::read_obj(&base_dir.join(path)),
     }

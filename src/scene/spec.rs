@@ -241,6 +241,9 @@ pub enum MeshSpec {
     SlitAnnulus { ri: f64, ro: f64, nr: usize, ntheta: usize },
     /// Strip along x, cross-section twisted linearly by `twist`. Edges x0, x1, smin, smax.
     TwistedStrip { length: f64, width: f64, twist: f64, nx: usize, ny: usize },
+    /// Full flat annulus about the z axis (closed in θ); `graded` radii grow geometrically
+    /// for near-square elements. Edges inner, outer.
+    Annulus { ri: f64, ro: f64, nr: usize, ntheta: usize, #[serde(default)] graded: bool },
     /// Quad mesh from a Wavefront OBJ file (path relative to the scene file). Edge boundary.
     Obj { path: String },
 }
