@@ -32,7 +32,7 @@ fn solve(grain_deg: f64, loads: &str, scales: &str) -> (Vec<Vector3<f64>>, State
          boundary: [Fix(set: \"a\", dofs: [Ux, Uy, Uz]), Fix(set: \"b\", dofs: [Uy, Uz]), Fix(set: \"c\", dofs: [Uz])],
          loads: {{ {loads} }},
          steps: [(name: \"load\", increments: 1, scale: {{ {scales} }})],
-         solver: (residual_tol: 1e-10))",
+         solver: (residual_tol: 1e-8))",
         g.cos(),
         g.sin()
     );
@@ -132,19 +132,22 @@ fn uniaxial_tension_reproduces_warp_weft_bias_stiffness() {
 fn pure_bending_reproduces_bending_rigidity() {
     let p = FabricProperties::preset("cotton_broadcloth").expect("preset");
     let (b1, b2, b66) = (p.warp_bending, p.weft_bending, p.twist_bending);
-    let m = 1.0e-7; // N·m/m: κL ≈ 1e-3, geometric nonlinearity ≈ 1e-6
     for grain in [0.0f64, 30.0, 90.0] {
         for (label, theta) in [("warp", 0.0f64), ("weft", 90.0), ("bias", 45.0)] {
             let phi = (grain + theta).to_radians();
             let n = Vector3::new(phi.cos(), phi.sin(), 0.0);
+            let (c, s) = (theta.to_radians().cos(), theta.to_radians().sin());
+            let expected = 1.0 / (c.powi(4) / b1 + s.powi(4) / b2 + c * c * s * s / b66);
+            // κL = 1e-5: the membrane energy of the non-developable (twisted) shape, of order
+            // A κ⁴L⁶ against D κ²L², stays below 1e-3 of the bending energy even for the soft
+            // twist (D ≈ 7e-8 N·m against A ≈ 3e3 N/m).
+            let m = 1e-5 * expected / L;
             let (loads, scales) = bending_loads(n, m);
             let (x0, st) = solve(grain, &loads, &scales);
             let k = curvature(&x0, &st);
             let n2 = nalgebra::Vector2::new(n.x, n.y);
             let kappa = n2.dot(&(k * n2)).abs();
             let measured = m / kappa;
-            let (c, s) = (theta.to_radians().cos(), theta.to_radians().sin());
-            let expected = 1.0 / (c.powi(4) / b1 + s.powi(4) / b2 + c * c * s * s / b66);
             let err = measured / expected - 1.0;
             println!("grain {grain:>4}° {label} bending: measured {measured:.6e} N·m, expected {expected:.6e}, error {:.2e}", err);
             assert!(err.abs() < 0.01, "grain {grain}° {label}: {measured} vs {expected}");

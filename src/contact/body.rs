@@ -84,6 +84,9 @@ pub struct RigidBody {
     pub mu_static: f64,
     /// Kinetic friction coefficient.
     pub mu_kinetic: f64,
+    /// Edge rounding radius: the body is the shape (already shrunk by it) swept by a ball of
+    /// this radius, so its signed distance is the shape's minus the radius.
+    pub rounding: f64,
 }
 
 impl RigidBody {
@@ -104,9 +107,9 @@ impl RigidBody {
                 let n = if r > 0.0 { xl / r } else { Vector3::z() };
                 (r - b.radius, n * b.radius, n)
             }
-            Shape::Box(c) => project(c, &xl, max_dist)?,
+            Shape::Box(c) => project(c, &xl, max_dist + self.rounding)?,
             Shape::Cylinder(c) => {
-                let (d, p, n) = project(c, &to_y(&xl), max_dist)?;
+                let (d, p, n) = project(c, &to_y(&xl), max_dist + self.rounding)?;
                 (d, from_y(&p), from_y(&n))
             }
             Shape::Capsule(c) => {
@@ -115,6 +118,8 @@ impl RigidBody {
             }
             Shape::Mesh(m) => project(m.as_ref(), &xl, max_dist)?,
         };
+        let dist = dist - self.rounding;
+        let pl = pl + nl * self.rounding;
         if dist > max_dist {
             return None;
         }

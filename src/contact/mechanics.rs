@@ -272,7 +272,7 @@ impl ContactSet {
 fn distance_hessian(body: &RigidBody, x: &Vector3<f64>, n: &Vector3<f64>, d: f64) -> Matrix3<f64> {
     match &body.shape {
         Shape::Plane => Matrix3::zeros(),
-        Shape::Sphere(b) => (Matrix3::identity() - n * n.transpose()) / (b.radius + d).max(1e-12),
+        Shape::Sphere(b) => (Matrix3::identity() - n * n.transpose()) / (b.radius + body.rounding + d).max(1e-12),
         _ => {
             let h = 1e-6 * x.norm().max(d.abs()).max(1e-3);
             let mut m = Matrix3::zeros();

@@ -46,6 +46,13 @@ pub fn build_contact(spec: &ContactSpec, loc: &Locator, base_dir: &Path, parts: 
     for (bi, b) in spec.bodies.iter().enumerate() {
         let field = format!("contact.bodies[{}]", b.name);
         let bad = |key: &str, msg: String| loc.at(Some(&b.name), Some(key), format!("{field}.{key}"), msg);
+        let rounding = b.rounding;
+        if !(rounding.is_finite() && rounding >= 0.0) {
+            return Err(bad("rounding", format!("expected a non-negative rounding radius, found {rounding}")));
+        }
+        if rounding > 0.0 && !matches!(b.shape, ShapeSpec::Box { .. } | ShapeSpec::Cylinder { .. }) {
+            return Err(bad("rounding", "rounding applies to Box and Cylinder bodies only".into()));
+        }
         let shape = match &b.shape {
             ShapeSpec::Plane => Shape::Plane,
             ShapeSpec::Sphere { radius } => {
@@ -55,16 +62,17 @@ pub fn build_contact(spec: &ContactSpec, loc: &Locator, base_dir: &Path, parts: 
                 Shape::Sphere(Ball::new(*radius))
             }
             ShapeSpec::Box { half_extents } => {
-                if !half_extents.iter().all(|&h| pos(h)) {
-                    return Err(bad("half_extents", format!("expected positive half extents, found {half_extents:?}")));
+                if !half_extents.iter().all(|&h| h.is_finite() && h > rounding) {
+                    return Err(bad("half_extents", format!("expected half extents larger than the rounding {rounding}, found {half_extents:?}")));
                 }
-                Shape::Box(Cuboid::new(PVec::new(half_extents[0], half_extents[1], half_extents[2])))
+                let r = rounding;
+                Shape::Box(Cuboid::new(PVec::new(half_extents[0] - r, half_extents[1] - r, half_extents[2] - r)))
             }
             ShapeSpec::Cylinder { radius, height } => {
-                if !pos(*radius) || !pos(*height) {
-                    return Err(bad("radius", format!("expected a positive radius and height, found {radius}, {height}")));
+                if !(radius.is_finite() && height.is_finite() && *radius > rounding && 0.5 * height > rounding) {
+                    return Err(bad("radius", format!("expected a radius and half height larger than the rounding {rounding}, found {radius}, {height}")));
                 }
-                Shape::Cylinder(Cylinder::new(0.5 * height, *radius))
+                Shape::Cylinder(Cylinder::new(0.5 * height - rounding, radius - rounding))
             }
             ShapeSpec::Capsule { radius, height } => {
                 if !pos(*radius) || !pos(*height) {
@@ -98,7 +106,7 @@ pub fn build_contact(spec: &ContactSpec, loc: &Locator, base_dir: &Path, parts: 
         if spec.bodies[..bi].iter().any(|o| o.name == b.name) {
             return Err(loc.at(Some(&b.name), None, field, "duplicate body name"));
         }
-        bodies.push(RigidBody { name: b.name.clone(), shape, pose, mu_static: b.friction, mu_kinetic: kinetic });
+        bodies.push(RigidBody { name: b.name.clone(), shape, pose, mu_static: b.friction, mu_kinetic: kinetic, rounding });
     }
     let mut part_ids = Vec::new();
     for p in &spec.parts {

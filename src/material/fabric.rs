@@ -21,10 +21,11 @@
 //! β = 45D/h³ − 15A/(4h), α = 9A/(4h) − 15D/h³.
 //! Any symmetric Gauss rule with three or more points integrates these quartic products
 //! exactly, so membrane and bending stiffnesses are reproduced independently, and the
-//! odd (coupling) moments vanish. With the 3-point rule the stiffness at ζ = ±√(3/5) is
+//! odd (coupling) moments vanish. Each D_ii is limited to 0.15·A_ii·h² so that α ≥ 0 (no
+//! negative-stiffness layer); for the in-plane shear/twist pair this caps the twisting
+//! rigidity of real fabrics well below √(B₁B₂) (see [`twist_default`]). With the 3-point rule the stiffness at ζ = ±√(3/5) is
 //! exactly 12D/h³, as for a homogeneous section of rigidity D. The total quadratic form in
-//! (membrane strain, curvature) is block diagonal [A, D] and positive definite even though
-//! α may be negative for a single component. This is the "thickness-integrated layers with a
+//! (membrane strain, curvature) is block diagonal [A, D] and positive definite. This is the "thickness-integrated layers with a
 //! bending scale" construction of the issue; no element change beyond passing ζ.
 //!
 //! Transverse shear: S₁₃ = (T/h)·2E₁₃, S₂₃ = (T/h)·2E₂₃ with a transverse shear stiffness T
@@ -52,7 +53,7 @@ pub struct FabricProperties {
     pub warp_bending: f64,
     /// Bending rigidity along the weft, N·m.
     pub weft_bending: f64,
-    /// Twisting rigidity, N·m (default: ½√(B₁B₂)).
+    /// Twisting rigidity, N·m (default: ½√(B₁B₂) capped by [`twist_default`]).
     pub twist_bending: f64,
     /// Transverse shear stiffness, N/m.
     pub transverse_shear: f64,
@@ -91,7 +92,7 @@ impl FabricProperties {
             poisson: nu,
             warp_bending: b1,
             weft_bending: b2,
-            twist_bending: 0.5 * (b1 * b2).sqrt(),
+            twist_bending: twist_default(b1, b2, g, h),
             transverse_shear: e1.max(e2),
             areal_density: rho,
             thickness: h,
@@ -117,6 +118,22 @@ impl FabricProperties {
                 return Err((name, format!("expected a positive value, found {v}")));
             }
         }
+        let cap = |a: f64| SPLIT_LIMIT * a * self.thickness * self.thickness;
+        for (name, d, a) in [
+            ("warp_bending", self.warp_bending, self.warp_tensile),
+            ("weft_bending", self.weft_bending, self.weft_tensile),
+            ("twist_bending", self.twist_bending, self.shear),
+        ] {
+            if d > cap(a) * (1.0 + 1e-12) {
+                return Err((
+                    name,
+                    format!(
+                        "{d:e} N·m exceeds {SPLIT_LIMIT}·(membrane stiffness)·h² = {:e} N·m: the through-thickness split would need a negative-stiffness mid layer (raise the stiffness or thickness, or lower the rigidity)",
+                        cap(a)
+                    ),
+                ));
+            }
+        }
         let nu21 = self.poisson * self.weft_tensile / self.warp_tensile;
         if !(self.poisson.is_finite() && self.poisson >= 0.0 && self.poisson * nu21 < 1.0) {
             return Err(("poisson", format!("expected 0 ≤ ν12 with ν12·ν21 < 1 (ν21 = ν12·weft/warp), found ν12 = {}", self.poisson)));
@@ -133,6 +150,18 @@ impl FabricProperties {
         }
         Ok(())
     }
+}
+
+/// Largest bending-to-membrane ratio D/(A h²) for which the mid-layer stiffness
+/// α = 9A/(4h) − 15D/h³ stays non-negative.
+pub const SPLIT_LIMIT: f64 = 0.15;
+
+/// Default twisting rigidity: ½√(B₁B₂), capped at [`SPLIT_LIMIT`]·G·h² (fabric's in-plane
+/// shear stiffness G is so low that the uncapped value would need a negative-stiffness mid
+/// layer, whose spurious geometric stiffness destabilises folding drapes — measured on the
+/// Cusick test).
+pub fn twist_default(b1: f64, b2: f64, shear: f64, h: f64) -> f64 {
+    (0.5 * (b1 * b2).sqrt()).min(SPLIT_LIMIT * shear * h * h)
 }
 
 /// The fabric lamina law (see the module documentation).

@@ -10,7 +10,7 @@ mod fabric;
 mod neo_hookean;
 mod svk;
 
-pub use fabric::{Fabric, FabricProperties, FABRIC_PRESETS};
+pub use fabric::{twist_default, Fabric, FabricProperties, FABRIC_PRESETS, SPLIT_LIMIT};
 pub use neo_hookean::NeoHookean;
 pub use svk::StVenantKirchhoff;
 

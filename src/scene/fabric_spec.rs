@@ -1,7 +1,7 @@
 //! Scene fabric spec → fabric sheet properties (preset plus explicit overrides).
 
 use super::spec::FabricSpec;
-use crate::material::{FabricProperties, FABRIC_PRESETS};
+use crate::material::{twist_default, FabricProperties, FABRIC_PRESETS};
 
 /// Resolves `spec` into validated properties; on error returns the field and the message.
 pub fn fabric_properties(spec: &FabricSpec) -> Result<FabricProperties, (&'static str, String)> {
@@ -19,7 +19,7 @@ pub fn fabric_properties(spec: &FabricSpec) -> Result<FabricProperties, (&'stati
                 poisson: spec.poisson.unwrap_or(0.0),
                 warp_bending: b1,
                 weft_bending: b2,
-                twist_bending: 0.5 * (b1 * b2).abs().sqrt(),
+                twist_bending: twist_default(b1, b2, need(spec.shear, "shear")?, need(spec.thickness, "thickness")?),
                 transverse_shear: e1.max(e2),
                 areal_density: need(spec.areal_density, "areal_density")?,
                 thickness: need(spec.thickness, "thickness")?,
@@ -36,11 +36,10 @@ pub fn fabric_properties(spec: &FabricSpec) -> Result<FabricProperties, (&'stati
     set(&mut p.weft_tensile, spec.weft_tensile);
     set(&mut p.shear, spec.shear);
     set(&mut p.poisson, spec.poisson);
-    let bending_given = spec.warp_bending.is_some() || spec.weft_bending.is_some();
     set(&mut p.warp_bending, spec.warp_bending);
     set(&mut p.weft_bending, spec.weft_bending);
-    if bending_given && spec.twist_bending.is_none() {
-        p.twist_bending = 0.5 * (p.warp_bending * p.weft_bending).abs().sqrt();
+    if spec.twist_bending.is_none() {
+        p.twist_bending = twist_default(p.warp_bending, p.weft_bending, p.shear, p.thickness);
     }
     set(&mut p.twist_bending, spec.twist_bending);
     if spec.transverse_shear.is_none() && (spec.warp_tensile.is_some() || spec.weft_tensile.is_some()) {

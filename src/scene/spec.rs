@@ -111,7 +111,9 @@ pub struct BodySpec {
     pub friction: f64,
     /// Kinetic coefficient (default: equal to `friction`).
     #[serde(default)]
-    pub kinetic_friction: Option<f64>,
+    pub kinetic_friction: Option<f64>,    /// Edge rounding radius of a box or cylinder (its outer dimensions are kept).
+    #[serde(default)]
+    pub rounding: f64,
 }
 
 /// Rigid-body shapes. Cylinder and capsule axes are the local z axis; the plane is z = 0
@@ -183,7 +185,7 @@ pub struct FabricSpec {
     pub warp_bending: Option<f64>,
     /// Weft bending rigidity, N·m.
     pub weft_bending: Option<f64>,
-    /// Twisting rigidity, N·m (default ½√(B1·B2)).
+    /// Twisting rigidity, N·m (default ½√(B1·B2), capped at 0.15·shear·thickness²).
     pub twist_bending: Option<f64>,
     /// Transverse shear stiffness, N/m (default the larger tensile stiffness).
     pub transverse_shear: Option<f64>,
