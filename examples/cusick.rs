@@ -1,6 +1,6 @@
 //! Cusick drape study: runs garments/drape/cusick.ron with a chosen fabric preset, mesh
 //! (ntheta sectors, graded rings for near-square elements), time step and a seeded
-//! perturbation (support disc shifted by up to 0.5 mm and tilted by up to 0.2° about a
+//! perturbation (both discs shifted by up to 0.5 mm and tilted by up to 0.2° about a
 //! seeded horizontal axis), and prints one JSON line: sizes, steps, Newton iterations, wall
 //! time and its split, drape coefficient, folds, penetration.
 //!
@@ -41,6 +41,7 @@ fn main() -> Result<(), String> {
             "translation: (0.0, 0.0, -0.010149999), rotation: (0.0, 0.0, 0.0)",
             &format!("translation: ({:e}, {:e}, {:e}), rotation: ({:e}, {:e}, 0.0)", shift * phi.cos(), shift * phi.sin(), z_top - 0.01, tilt * axis.cos(), tilt * axis.sin()),
         )
+        .replace("translation: (0.0, 0.0, 0.010149999)", &format!("translation: ({:e}, {:e}, {:e}), rotation: ({:e}, {:e}, 0.0)", shift * phi.cos(), shift * phi.sin(), -z_top + 0.01, tilt * axis.cos(), tilt * axis.sin()))
         .replace("output: (every: 50)", "output: (vtu: false)");
     let sc = scene::parse(path, &text).map_err(|e| e.to_string())?;
     let built = scene::build(&sc, path, &text).map_err(|e| e.to_string())?;

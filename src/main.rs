@@ -87,6 +87,9 @@ fn check(scene: &Scene, built: &BuiltScene) {
             q.min_angle_deg, q.max_angle_deg, q.max_aspect_ratio, q.min_jacobian_ratio
         );
     }
+    for w in built.contact.iter().flat_map(|c| &c.warnings) {
+        eprintln!("warning: {w}");
+    }
 }
 
 fn solve(scene: &Scene, built: &BuiltScene, out: &Path, quiet: bool) -> Result<(), String> {

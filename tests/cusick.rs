@@ -19,6 +19,7 @@ fn cusick(preset: &str) -> (f64, u64, f64) {
         .replace("preset: Some(\"cotton_broadcloth\")", &format!("preset: Some(\"{preset}\")"))
         .replace("thickness: 0.3e-3", &format!("thickness: {h:e}"))
         .replace("translation: (0.0, 0.0, -0.010149999)", &format!("translation: (0.0, 0.0, {:e})", -0.5 * h + 1e-9 - 0.01))
+        .replace("translation: (0.0, 0.0, 0.010149999)", &format!("translation: (0.0, 0.0, {:e})", 0.5 * h - 1e-9 + 0.01))
         .replace("nr: 16, ntheta: 48", "nr: 11, ntheta: 32")
         .replace("time_step: 1.0e-3", "time_step: 0.75e-3")
         .replace("increments: 400", "increments: 400")

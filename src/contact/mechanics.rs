@@ -117,6 +117,8 @@ pub struct ContactSet {
     last: Vec<PairEval>,
     slots: Option<Vec<[Option<usize>; 9]>>,
     search_s: f64,
+    /// Reject trial states with a mid-surface through a body (see `add`).
+    pub reject_through: bool,
     /// Per-increment reports (also returned by `commit`).
     pub increments: Vec<ContactIncrement>,
 }
@@ -166,6 +168,7 @@ impl ContactSet {
             last: vec![PairEval::default(); np],
             slots: None,
             search_s: 0.0,
+            reject_through: true,
             increments: Vec::new(),
         }
     }
@@ -186,7 +189,11 @@ impl ContactSet {
                 let mut kk = Matrix3::zeros();
                 let mut evals = vec![PairEval::default(); nb];
                 for (b, body) in self.bodies.iter().enumerate() {
-                    let Some(prox) = body.proximity(&x, r) else { continue };
+                    // Search reach: the offset plus twice the node's spacing, so that a node a
+                    // Newton step carried deeper than the offset is still seen (a bounded
+                    // trimesh query returns nothing for points farther inside than the bound).
+                    let reach = r + 2.0 * self.area[i].sqrt();
+                    let Some(prox) = body.proximity(&x, reach) else { continue };
                     let g = prox.distance - r;
                     if g >= 0.0 {
                         evals[b].gap = g;
@@ -303,7 +310,7 @@ impl Contribution for ContactSet {
             // (mid-surface through the body) would be answered by a huge penalty force and
             // the iteration would chatter between contact and separation: reject the trial
             // state so the step is shortened instead.
-            let through = ev.iter().any(|e| e.active && -e.gap > self.offset[i]);
+            let through = self.reject_through && ev.iter().any(|e| e.active && -e.gap > self.offset[i]);
             for k in 0..3 {
                 f_int[NODE_DOFS * a + k] += if through { f64::NAN } else { f[k] };
             }

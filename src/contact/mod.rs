@@ -165,7 +165,8 @@ pub fn attach<'m>(solver: &mut crate::solver::Solver<'m>, model: &'m crate::mode
 }
 
 /// Largest penetration of any shell node's face (offset h/2) into any body at `state`, by
-/// a fresh proximity query per node and body (independent of the penalty bookkeeping).
+/// a fresh, unbounded proximity query per node and body (independent of the penalty
+/// bookkeeping and its search reach).
 pub fn max_penetration(model: &crate::model::Model, state: &crate::model::State, bodies: &[RigidBody]) -> f64 {
     use rayon::prelude::*;
     let mut half = vec![0.0f64; model.n_nodes()];
@@ -178,7 +179,7 @@ pub fn max_penetration(model: &crate::model::Model, state: &crate::model::State,
         .into_par_iter()
         .map(|a| {
             let x = model.position(state, a);
-            bodies.iter().filter_map(|b| b.proximity(&x, half[a])).map(|p| half[a] - p.distance).fold(0.0, f64::max)
+            bodies.iter().filter_map(|b| b.proximity(&x, f64::MAX)).map(|p| half[a] - p.distance).fold(0.0, f64::max)
         })
         .reduce(|| 0.0, f64::max)
 }

@@ -106,14 +106,18 @@ impl Contribution for Stabilization {
 /// one time step Δt per converged increment (Hughes 2000 §9.1; backward Euler damps high
 /// frequencies, the damping ζ-term the slow swinging):
 /// f = m (u − u_n − Δt v_n)/Δt² + η m (u − u_n)/Δt, tangent (m/Δt² + η m/Δt)·I,
-/// and on convergence v_n ← (u − u_n)/Δt, u_n ← u. Gravity then accelerates the cloth
+/// and on convergence v_n ← (u − u_n)/Δt, u_n ← u. A cut-back increment (the solver halves
+/// it after a failed attempt) takes a proportionally shorter time step, which raises m/Δt²
+/// and carries the solve through fold formation. Gravity then accelerates the cloth
 /// (a fall of L takes about √(2L/g)/Δt increments) instead of creeping at the terminal
 /// speed of the viscous term. The inertia and damping forces vanish at rest, so the
 /// settled state is a static equilibrium; the summary reports how settled it is.
 /// This is the contact module's stop-gap until the solver's dynamics path is merged.
 pub struct Inertia {
-    /// Time step per increment (s).
+    /// Time step per nominal increment (s).
     pub time_step: f64,
+    /// Time step of the current (sub-)increment: shortened with the solver's cut-backs.
+    current_step: f64,
     /// Mass-proportional damping η (1/s).
     pub damping: f64,
     mass: Vec<f64>,
@@ -146,18 +150,22 @@ impl Inertia {
             }
         }
         let n = model.n_nodes();
-        Self { time_step, damping, mass, previous: vec![Vector3::zeros(); n], velocity: vec![Vector3::zeros(); n], slots: None, history: Vec::new() }
+        Self { time_step, current_step: time_step, damping, mass, previous: vec![Vector3::zeros(); n], velocity: vec![Vector3::zeros(); n], slots: None, history: Vec::new() }
     }
 
     fn stiffness(&self, n: usize) -> f64 {
-        let dt = self.time_step;
+        let dt = self.current_step;
         self.mass[n] * (1.0 / (dt * dt) + self.damping / dt)
     }
 }
 
 impl Contribution for Inertia {
+    fn begin_increment(&mut self, fraction: f64) {
+        self.current_step = self.time_step * fraction.clamp(1e-6, 1.0);
+    }
+
     fn add(&mut self, model: &Model, state: &State, pattern: &Pattern, f_int: &mut [f64], values: Option<&mut [f64]>) {
-        let dt = self.time_step;
+        let dt = self.current_step;
         for n in 0..model.n_nodes() {
             let du = state.u[n] - self.previous[n];
             let f = (du - self.velocity[n] * dt) * (self.mass[n] / (dt * dt)) + du * (self.damping * self.mass[n] / dt);
@@ -186,7 +194,7 @@ impl Contribution for Inertia {
     fn commit(&mut self, _model: &Model, state: &State) -> Option<serde_json::Value> {
         let mut rep = InertiaIncrement::default();
         for n in 0..self.mass.len() {
-            let v = (state.u[n] - self.previous[n]) / self.time_step;
+            let v = (state.u[n] - self.previous[n]) / self.current_step;
             rep.kinetic_energy += 0.5 * self.mass[n] * v.norm_squared();
             rep.max_speed = rep.max_speed.max(v.norm());
             self.velocity[n] = v;

@@ -18,6 +18,12 @@ pub trait Contribution: Send {
     /// Called once per converged (sub-)increment with the converged state; returns a report
     /// for the increment (e.g. active-set changes), if any.
     fn commit(&mut self, model: &Model, state: &State) -> Option<serde_json::Value>;
+    /// Called before each (sub-)increment attempt with its size as a fraction of the nominal
+    /// increment (1 normally, ½, ¼, … after cut-backs), so time-stepping terms can shorten
+    /// their step with the increment.
+    fn begin_increment(&mut self, fraction: f64) {
+        let _ = fraction;
+    }
     /// Wall time spent in proximity search so far (s), reported separately from assembly.
     fn search_seconds(&self) -> f64 {
         0.0

@@ -394,6 +394,9 @@ impl<'m> Solver<'m> {
                     let saved = state.clone();
                     let frac = (done_before as f64 + next * n_inc as f64) / total as f64;
                     let mut report_progress = |it: usize, res: f64| progress(&Progress { step: si, fraction: frac, iteration: it, residual: res });
+                    for c in self.extras.iter_mut() {
+                        c.begin_increment((next - tau) * n_inc as f64);
+                    }
                     match self.attempt(state, &trial_scales, step.linear, &mut report_progress) {
                         Attempt::Converged { iterations: its, residuals, indefinite: ind, energy } => {
                             iterations += its;
