@@ -397,6 +397,15 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
         Some(c) => Some(crate::contact::build_contact(c, &loc, base_dir, &parts)?),
         None => None,
     };
+    if let Some(d) = &scene.drape {
+        let ok = |v: f64| v.is_finite() && v > 0.0;
+        if contact.is_none() {
+            return Err(loc.at(None, Some("drape"), "drape", "drape measures need a contact section (the support disc)"));
+        }
+        if !ok(d.disc_radius) || !ok(d.specimen_radius) || d.disc_radius >= d.specimen_radius || d.resolution.is_some_and(|r| !ok(r)) {
+            return Err(loc.at(None, Some("drape"), "drape", "expected 0 < disc_radius < specimen_radius and a positive resolution"));
+        }
+    }
     let dofs = DofMap::new(&fixed);
     let model = Model { x0, frames0, elements, sections, parts, dofs, loads };
     Ok(BuiltScene { model, steps, monitors, node_sets, quality, contact })
