@@ -43,7 +43,11 @@ pub struct RunOptions {
 /// the monitor plot into the output directory.
 pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &mut dyn FnMut(&Progress)) -> Result<Summary, RunError> {
     let t0 = Instant::now();
-    let model = &built.model;
+    let seeded = match &built.imperfection {
+        Some(imp) => Some(crate::solver::imperfection::seeded(&built.model, imp, &scene.solver).map_err(RunError::Setup)?),
+        None => None,
+    };
+    let model = seeded.as_ref().map_or(&built.model, |s| &s.0);
     let mut solver = Solver::new(model, scene.solver.clone()).map_err(RunError::Setup)?;
     if let Some(c) = &built.contact {
         crate::contact::attach(&mut solver, model, c);
@@ -54,6 +58,7 @@ pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &m
         sizes: Sizes { nodes: model.n_nodes(), elements: model.elements.len(), dofs, tangent_nnz, factor_nnz },
         loads: model.loads.iter().map(|l| l.name.clone()).collect(),
         monitors: built.monitors.iter().map(|m| MonitorHistory::new(m, model)).collect(),
+        imperfection_buckling: seeded.as_ref().and_then(|s| s.1.clone()),
         ..Default::default()
     };
     if let Some(dir) = &options.out_dir {
@@ -61,30 +66,53 @@ pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &m
     }
     let export = ExportOptions { binary: scene.output.binary, ..Default::default() };
     let mut pvd_entries: Vec<(f64, String)> = Vec::new();
+    let mut garment_entries: Vec<(f64, String)> = Vec::new();
+    let garment_export = !built.seams.is_empty() || built.garment.is_some();
     let mut export_s = 0.0;
     let mut io_error: Option<String> = None;
+    let mut mode_files: Vec<String> = Vec::new();
     let mut state = model.initial_state();
     let steps = &built.steps;
     let every = scene.output.every.max(1);
     let result = solver.run(
         steps,
         &mut state,
-        &mut |report, st, sol| {
+        &mut |report, st, solved| {
             for (h, m) in summary.monitors.iter_mut().zip(&built.monitors) {
                 h.record(m, model, st);
             }
             summary.newton_iterations += report.iterations;
-            let last_of_step = report.increment == steps[report.step].increments;
+            let last_of_step = report.increment == steps[report.step].increments || report.dynamics.as_ref().is_some_and(|d| d.end_of_step);
             if let (Some(dir), true) = (&options.out_dir, scene.output.vtu && (report.increment % every == 0 || last_of_step)) {
                 let t = Instant::now();
                 let name = format!("{}_{:04}.vtu", scene.name, pvd_entries.len() + 1);
                 let mut export = export.clone();
-                export.extra_point_data = sol.contributions().iter().flat_map(|c| c.point_data(model, st)).collect();
+                export.extra_point_data = solved.contributions().iter().flat_map(|c| c.point_data(model, st)).collect();
                 match write_state_vtu(&dir.join(&name), model, st, &export) {
                     Ok(()) => pvd_entries.push((report.time, name)),
                     Err(e) => io_error = io_error.take().or(Some(e.to_string())),
                 }
+                if garment_export {
+                    let gname = format!("{}_garment_{:04}.vtu", scene.name, garment_entries.len() + 1);
+                    let mut f_ext = vec![0.0; solved.internal_force().len()];
+                    model.external_force(st, &report.scales, &mut f_ext);
+                    let forces = Some((solved.internal_force(), f_ext.as_slice()));
+                    match crate::garment::export::write_garment_vtu(&dir.join(&gname), model, Some(st), built.garment.as_ref(), &built.seams, forces, export.binary) {
+                        Ok(()) => garment_entries.push((report.time, gname)),
+                        Err(e) => io_error = io_error.take().or(Some(e.to_string())),
+                    }
+                }
                 export_s += t.elapsed().as_secs_f64();
+            }
+            if let Some(ev) = &report.stability_event {
+                summary.stability_events.push((summary.increments.len(), format!("step {} increment {}: {ev}", report.step + 1, report.increment)));
+            }
+            if let (Some(dir), Some(b)) = (&options.out_dir, &report.buckling) {
+                let name = format!("{}_buckling_step{}.vtu", scene.name, report.step + 1);
+                match crate::io::modes::write_modes_vtu(&dir.join(&name), model, st, &b.modes, scene.output.binary) {
+                    Ok(()) => mode_files.push(name),
+                    Err(e) => io_error = io_error.take().or(Some(e.to_string())),
+                }
             }
             summary.increments.push(report.clone());
         },
@@ -113,7 +141,18 @@ pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &m
         let pvd_name = format!("{}.pvd", scene.name);
         pvd::write_pvd(&dir.join(&pvd_name), &pvd_entries).map_err(|e| RunError::Io(e.to_string()))?;
         summary.files = pvd_entries.iter().map(|e| e.1.clone()).collect();
+        summary.files.append(&mut mode_files);
         summary.files.push(pvd_name);
+        if garment_export {
+            let flat = format!("{}_pattern.vtu", scene.name);
+            crate::garment::export::write_garment_vtu(&dir.join(&flat), model, None, built.garment.as_ref(), &built.seams, None, export.binary)
+                .map_err(|e| RunError::Io(e.to_string()))?;
+            let gpvd = format!("{}_garment.pvd", scene.name);
+            pvd::write_pvd(&dir.join(&gpvd), &garment_entries).map_err(|e| RunError::Io(e.to_string()))?;
+            summary.files.extend(garment_entries.iter().map(|e| e.1.clone()));
+            summary.files.push(flat);
+            summary.files.push(gpvd);
+        }
         if let Some(name) = write_monitor_plot(dir, scene, built, &summary).map_err(RunError::Io)? {
             summary.files.push(name);
         }

@@ -27,6 +27,14 @@ pub mod scenes {
     pub const TWISTED_BEAM: &str = include_str!("../garments/benchmarks/twisted_beam.ron");
     /// Clamped plate, thin limit.
     pub const CLAMPED_PLATE: &str = include_str!("../garments/benchmarks/clamped_plate.ron");
+    /// Simply supported square plate in uniaxial compression, linearized buckling.
+    pub const PLATE_BUCKLING: &str = include_str!("../garments/benchmarks/plate_buckling.ron");
+    /// Axially compressed cylinder (quarter), linearized buckling.
+    pub const CYLINDER_BUCKLING: &str = include_str!("../garments/benchmarks/cylinder_buckling.ron");
+    /// The square plate loaded past buckling, seeded with its first mode.
+    pub const PLATE_POSTBUCKLING: &str = include_str!("../garments/benchmarks/plate_postbuckling.ron");
+    /// Sze et al. (2004) §3.8a hinged cylindrical roof, arc length.
+    pub const HINGED_ROOF: &str = include_str!("../garments/benchmarks/hinged_roof.ron");
 }
 
 /// Bundled reference tables (copies of `shared/reference`, headers name the sources).
@@ -35,6 +43,8 @@ pub mod references {
     pub const END_SHEAR_ELASTICA: &str = include_str!("../reference/cantilever_end_shear_elastica_computed.csv");
     /// Sze et al. (2004) slit annular plate, S4R 10×80.
     pub const SLIT_ANNULUS: &str = include_str!("../reference/sze2004_slit_annular_plate.csv");
+    /// Sze et al. (2004) hinged roof case a, ordered along the path.
+    pub const HINGED_ROOF_A: &str = include_str!("../reference/sze2004_hinged_roof_case_a.csv");
 }
 
 /// One benchmark run.
@@ -253,6 +263,158 @@ pub fn clamped_plate(n: usize, t: f64, shear_sri: bool) -> Result<(f64, f64, Sum
     Ok((v, 0.00126532 * q / d, s, w))
 }
 
+/// A load–deflection path compared with a reference polyline.
+#[derive(Clone, Debug)]
+pub struct PathComparison {
+    /// The run.
+    pub summary: Summary,
+    /// Computed path (deflection, load), starting at (0, 0).
+    pub path: Vec<(f64, f64)>,
+    /// Reference path (deflection, load).
+    pub reference: Vec<(f64, f64)>,
+    /// Largest distance between the two polylines (both directions, Hausdorff) in
+    /// coordinates normalised by the reference's deflection and load ranges; computed points
+    /// beyond the reference's largest deflection are left out.
+    pub curve_error: f64,
+    /// Computed limit load: vertex of the parabola P(w) through the highest point of the
+    /// first rising branch and its two neighbours.
+    pub limit_load: f64,
+    /// Reference limit load (largest load before the first descent).
+    pub reference_limit: f64,
+    /// Wall time (s).
+    pub wall_s: f64,
+}
+
+/// Distance from `q` to the polyline `poly`, coordinates divided by `scale`.
+pub fn polyline_distance(q: (f64, f64), poly: &[(f64, f64)], scale: (f64, f64)) -> f64 {
+    let (qx, qy) = (q.0 / scale.0, q.1 / scale.1);
+    poly.windows(2)
+        .map(|w| {
+            let (ax, ay, bx, by) = (w[0].0 / scale.0, w[0].1 / scale.1, w[1].0 / scale.0, w[1].1 / scale.1);
+            let (dx, dy) = (bx - ax, by - ay);
+            let l2 = dx * dx + dy * dy;
+            let t = if l2 > 0.0 { (((qx - ax) * dx + (qy - ay) * dy) / l2).clamp(0.0, 1.0) } else { 0.0 };
+            (qx - ax - t * dx).hypot(qy - ay - t * dy)
+        })
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// Vertex height of the parabola through three points (x, y); the middle y when they are
+/// collinear.
+fn parabola_peak(p: [(f64, f64); 3]) -> f64 {
+    let [(x0, y0), (x1, y1), (x2, y2)] = p;
+    // Newton divided differences: y = y0 + d1 (x − x0) + d2 (x − x0)(x − x1).
+    let d01 = (y1 - y0) / (x1 - x0);
+    let d12 = (y2 - y1) / (x2 - x1);
+    let d2 = (d12 - d01) / (x2 - x0);
+    if !(d2 < 0.0) || !d2.is_finite() {
+        return y1;
+    }
+    // dy/dx = d01 + d2 (2x − x0 − x1) = 0.
+    let xv = (x0 + x1) / 2.0 - d01 / (2.0 * d2);
+    y0 + d01 * (xv - x0) + d2 * (xv - x0) * (xv - x1)
+}
+
+/// Hinged cylindrical roof, case a (Sze et al. 2004 §3.8a), on an n×n quarter mesh, by
+/// arc length or by displacement control of the centre deflection. Load P = 1000 λ (whole
+/// roof), deflection w = −u_z at the centre.
+pub fn hinged_roof(n: usize, displacement_control: bool) -> Result<PathComparison, String> {
+    hinged_roof_with(n, displacement_control, &[])
+}
+
+/// [`hinged_roof`] with further text substitutions applied to the scene after the mesh and
+/// step ones (e.g. solver settings; the arc-length text then reads
+/// `length: {0.5 n/8:e}, max_length: Some({n/8:e})`).
+pub fn hinged_roof_with(n: usize, displacement_control: bool, extra: &[(&str, String)]) -> Result<PathComparison, String> {
+    let t = Instant::now();
+    let mut rep = vec![("n_axial: 8, n_circ: 8", format!("n_axial: {n}, n_circ: {n}"))];
+    // The arc-length norm runs over all free translations, so it grows like the square root
+    // of the node count: scale the arc lengths with n to keep the same path resolution.
+    let f = n as f64 / 8.0;
+    if !displacement_control {
+        rep.push(("length: 0.5, max_length: Some(1.0)", format!("length: {:e}, max_length: Some({:e})", 0.5 * f, f)));
+    }
+    if displacement_control {
+        rep.push((
+            "kind: ArcLength(length: 0.5, max_length: Some(1.0), max_load_factor: 4.0, max_displacement: Some(30.0)),",
+            "kind: DisplacementControl(set: \"centre\", dof: Uz, value: -29.4),".to_string(),
+        ));
+        rep.push(("increments: 300", "increments: 60".to_string()));
+    }
+    rep.extend(extra.iter().cloned());
+    let summary = solve_variant(scenes::HINGED_ROOF, "hinged_roof", &rep)?;
+    let table = parse_csv(references::HINGED_ROOF_A);
+    let reference: Vec<(f64, f64)> = table.iter().filter(|r| r.len() >= 4).map(|r| (r[3], r[2])).collect();
+    let centre = summary.monitors.first().ok_or("no monitor")?;
+    let mut path = vec![(0.0, 0.0)];
+    for (inc, v) in summary.increments.iter().zip(&centre.values) {
+        path.push((-v[0], 1000.0 * inc.load_factor.ok_or("no load factor")?));
+    }
+    let w_max = reference.iter().map(|p| p.0).fold(0.0, f64::max);
+    let p_hi = reference.iter().map(|p| p.1).fold(f64::NEG_INFINITY, f64::max);
+    let p_lo = reference.iter().map(|p| p.1).fold(f64::INFINITY, f64::min);
+    let scale = (w_max, p_hi - p_lo);
+    let inside: Vec<(f64, f64)> = path.iter().copied().filter(|p| p.0 <= w_max).collect();
+    let e1 = reference.iter().map(|&q| polyline_distance(q, &path, scale)).fold(0.0, f64::max);
+    let e2 = inside.iter().map(|&q| polyline_distance(q, &reference, scale)).fold(0.0, f64::max);
+    let first_peak = |p: &[(f64, f64)]| -> usize {
+        let mut i = 0;
+        while i + 1 < p.len() && p[i + 1].1 >= p[i].1 {
+            i += 1;
+        }
+        i
+    };
+    let ir = first_peak(&reference);
+    let ic = first_peak(&path);
+    if ic == 0 || ic + 1 >= path.len() {
+        return Err(format!("hinged roof: no limit point on the computed path ({} points)", path.len()));
+    }
+    let limit_load = parabola_peak([path[ic - 1], path[ic], path[ic + 1]]);
+    Ok(PathComparison { summary, path, reference: reference.clone(), curve_error: e1.max(e2), limit_load, reference_limit: reference[ir].1, wall_s: t.elapsed().as_secs_f64() })
+}
+
+/// Lowest eigenvalue of a bundled `Buckling` scene with substitutions, and the run.
+fn lowest_buckling_eigenvalue(template: &str, name: &str, rep: &[(&str, String)]) -> Result<(f64, Summary, f64), String> {
+    let t = Instant::now();
+    let s = solve_variant(template, name, rep)?;
+    let lam = s
+        .increments
+        .iter()
+        .find_map(|i| i.buckling.as_ref())
+        .and_then(|b| b.eigenvalues.first().copied())
+        .ok_or("no buckling eigenvalue")?;
+    Ok((lam, s, t.elapsed().as_secs_f64()))
+}
+
+/// Simply supported square plate (a = b = 1, t = 0.01, E = 1e7, ν = 0.3) under unit edge
+/// compression on an n×n mesh: the buckling coefficient k = N_cr b² / (π² D), classical 4.
+pub fn plate_buckling(n: usize) -> Result<(f64, Summary, f64), String> {
+    let (lam, s, w) = lowest_buckling_eigenvalue(scenes::PLATE_BUCKLING, "plate_buckling", &[("nx: 16, ny: 16", format!("nx: {n}, ny: {n}"))])?;
+    let d = 1.0e7 * 0.01f64.powi(3) / (12.0 * (1.0 - 0.09));
+    Ok((lam / (std::f64::consts::PI.powi(2) * d), s, w))
+}
+
+/// Axially compressed cylinder (R = 1, t = 0.01, L = 1, E = 1e7, ν = 0) on a quarter mesh
+/// n_axial × n_circ: the lowest critical stress over the classical E t / (R √3).
+pub fn cylinder_buckling(n_axial: usize, n_circ: usize) -> Result<(f64, Summary, f64), String> {
+    let rep = [("n_axial: 40, n_circ: 60", format!("n_axial: {n_axial}, n_circ: {n_circ}"))];
+    let (lam, s, w) = lowest_buckling_eigenvalue(scenes::CYLINDER_BUCKLING, "cylinder_buckling", &rep)?;
+    let classical = 1.0e7 * 0.01 * 0.01 / 3f64.sqrt();
+    Ok((lam / classical, s, w))
+}
+
+/// The square plate of [`plate_buckling`] (16×16) under load control to 1.5 N_cr in 30
+/// increments, seeded with its first buckling mode at 1 % of the thickness, or perfect.
+pub fn plate_postbuckling(seeded: bool) -> Result<(Summary, f64), String> {
+    let t = Instant::now();
+    let mut rep = vec![];
+    if !seeded {
+        rep.push(("imperfection: Some(BucklingModes(scale: {\"compression\": 1.0}, modes: [(mode: 1, amplitude: 1.0e-4)])),", String::new()));
+    }
+    let s = solve_variant(scenes::PLATE_POSTBUCKLING, "plate_postbuckling", &rep)?;
+    Ok((s, t.elapsed().as_secs_f64()))
+}
+
 fn record(benchmark: &str, mesh: String, s: &Summary, wall_s: f64, value: f64, reference: f64, rel_error: f64) -> Record {
     Record { benchmark: benchmark.into(), mesh, dofs: s.sizes.dofs, newton_iterations: s.newton_iterations, wall_s, value, reference, rel_error }
 }
@@ -314,6 +476,24 @@ pub fn run_all(json: &Path, quick: bool) -> Result<(), String> {
             let (v, reference, s, w) = clamped_plate(n, 1e-4, sri)?;
             let name = if sri { "clamped_plate_t1e-4_sri" } else { "clamped_plate_t1e-4_mitc4" };
             recs.push(record(name, format!("{n}x{n}"), &s, w, v, reference, (v - reference).abs() / reference));
+            print(recs.last().ok_or("empty")?);
+        }
+    }
+    for n in pick(vec![8, 16, 24, 32], quick) {
+        let (k, s, w) = plate_buckling(n)?;
+        recs.push(record("plate_buckling_k", format!("{n}x{n}"), &s, w, k, 4.0, (k - 4.0).abs() / 4.0));
+        print(recs.last().ok_or("empty")?);
+    }
+    for (na, nc) in pick(vec![(20, 30), (40, 60), (60, 90)], quick) {
+        let (r, s, w) = cylinder_buckling(na, nc)?;
+        recs.push(record("cylinder_buckling_ratio", format!("{na}x{nc}q"), &s, w, r, 1.0, (r - 1.0).abs()));
+        print(recs.last().ok_or("empty")?);
+    }
+    for dc in [false, true] {
+        for n in pick(vec![8, 16], quick) {
+            let c = hinged_roof(n, dc)?;
+            let name = if dc { "hinged_roof_a_displacement_control" } else { "hinged_roof_a_arc_length" };
+            recs.push(record(name, format!("{n}x{n}q"), &c.summary, c.wall_s, c.limit_load, c.reference_limit, c.curve_error));
             print(recs.last().ok_or("empty")?);
         }
     }

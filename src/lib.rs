@@ -29,3 +29,4 @@ pub mod io;
 pub mod results;
 pub mod bench;
 pub mod contact;
+pub mod garment;

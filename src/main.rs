@@ -87,6 +87,12 @@ fn check(scene: &Scene, built: &BuiltScene) {
             q.min_angle_deg, q.max_angle_deg, q.max_aspect_ratio, q.min_jacobian_ratio
         );
     }
+    if !built.seams.is_empty() {
+        println!("  {} seams, {} tied DOFs", built.seams.len(), m.dofs.ties.len());
+    }
+    for w in &built.warnings {
+        eprintln!("{w}");
+    }
     for w in built.contact.iter().flat_map(|c| &c.warnings) {
         eprintln!("warning: {w}");
     }

@@ -97,6 +97,13 @@ pub struct Summary {
     /// Sections of optional features (contact, stabilization, drape), by name.
     #[serde(flatten)]
     pub extra: std::collections::BTreeMap<String, serde_json::Value>,
+    /// Limit points and bifurcations detected along the path: (increment index in
+    /// `increments`, description).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub stability_events: Vec<(usize, String)>,
+    /// Buckling analysis of the perfect geometry that seeded the imperfection.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub imperfection_buckling: Option<crate::solver::BucklingReport>,
 }
 
 /// Peak resident set size of this process in MiB (Linux `VmHWM`).

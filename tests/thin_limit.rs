@@ -4,10 +4,12 @@
 
 use plyshell::bench::{self, Material};
 
+/// End-moment roll-up (Sze et al. 2004 §3.2) at h/L = 1e-4 on 16×1: tip within 1 % of the
+/// analytic circle at all 20 levels, MITC4 and SRI.
 #[test]
 fn end_moment_cantilever_at_thickness_ratio_1e_4() {
     for sri in [false, true] {
-        let c = bench::end_moment(32, 12.0e-4, Material::Svk, sri).expect("solve");
+        let c = bench::end_moment(16, 12.0e-4, Material::Svk, sri).expect("solve");
         assert_eq!(c.points.len(), 20);
         for p in &c.points {
             assert!(p.rel_error() < 0.01, "sri = {sri} at M/Mmax = {}: {:?} vs {:?}", p.level, p.computed, p.reference);

@@ -8,8 +8,8 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
-use crate::element::{ElementFailure, ElementOutput, ELEMENT_DOFS, NODE_DOFS};
-use crate::model::{Model, State, FIXED};
+use crate::element::{ElementFailure, ElementGeometry, ElementOutput, SectionRule, ELEMENT_DOFS, NODE_DOFS};
+use crate::model::{Model, State, FIXED, UNTIED};
 
 const NO_SLOT: u32 = u32::MAX;
 const CHUNK: usize = 2048;
@@ -23,6 +23,24 @@ pub struct Pattern {
     pub col_ptr: Vec<usize>,
     /// Row indices, sorted within each column, row ≤ column.
     pub row_idx: Vec<usize>,
+}
+
+impl Pattern {
+    /// Adds `m` w_r w_c to every stored entry (r, c), r ≤ c, of the weighted equations
+    /// `exp` — a diagonal term m of a tied slave DOF taken through the tie (Tᵀ M T).
+    pub fn add_weighted(&self, values: &mut [f64], exp: &[(usize, f64)], m: f64) {
+        for &(r, wr) in exp {
+            for &(c, wc) in exp {
+                if r > c {
+                    continue;
+                }
+                let rows = &self.row_idx[self.col_ptr[c]..self.col_ptr[c + 1]];
+                if let Ok(p) = rows.binary_search(&r) {
+                    values[self.col_ptr[c] + p] += m * wr * wc;
+                }
+            }
+        }
+    }
 }
 
 /// An element failure located in the model.
@@ -40,7 +58,16 @@ pub struct Assembler {
     /// Sparsity pattern of the free-DOF tangent (upper triangle).
     pub pattern: Pattern,
     slots: Vec<[u32; ELEMENT_DOFS * ELEMENT_DOFS]>,
+    /// Integration rule of each section (built once).
+    rules: Vec<Result<SectionRule, ElementFailure>>,
+    /// Reference geometry of each element (built once; a degenerate element keeps its failure).
+    geometry: Vec<Result<ElementGeometry, ElementFailure>>,
+    /// Entries of elements with tied DOFs that go through the constraint weights:
+    /// (local entry i·20+j, slot, w_i w_j), the element's part of Tᵀ K T. Empty for
+    /// elements without tied DOFs (their entries all take the direct path).
+    tied: Vec<Vec<(u16, u32, f64)>>,
 }
+
 
 /// What one assembly produced besides the matrix values.
 #[derive(Clone, Debug, Default)]
@@ -82,6 +109,24 @@ impl Assembler {
                 }
             }
         }
+        // Couplings through tied DOFs: every pair of expanded equations of an element.
+        let has_ties = !model.dofs.ties.is_empty();
+        let is_tied = |el: &crate::model::ElementDef| {
+            has_ties && el.nodes.iter().any(|&n| (0..NODE_DOFS).any(|k| model.dofs.tie_of[NODE_DOFS * n + k] != UNTIED))
+        };
+        for el in model.elements.iter().filter(|el| is_tied(el)) {
+            let mut all: Vec<usize> = (0..ELEMENT_DOFS)
+                .flat_map(|i| model.dofs.expand(NODE_DOFS * el.nodes[i / NODE_DOFS] + i % NODE_DOFS))
+                .map(|(e, _)| e)
+                .collect();
+            all.sort_unstable();
+            all.dedup();
+            for (a, &r) in all.iter().enumerate() {
+                for &c in &all[a..] {
+                    cols[c].push(r);
+                }
+            }
+        }
         let mut col_ptr = Vec::with_capacity(cols.len() + 1);
         let mut row_idx = Vec::new();
         col_ptr.push(0);
@@ -113,7 +158,49 @@ impl Assembler {
                 s
             })
             .collect();
-        Self { pattern, slots }
+        let slot_of = |r: usize, c: usize| -> Option<u32> {
+            let rows = &pattern.row_idx[pattern.col_ptr[c]..pattern.col_ptr[c + 1]];
+            rows.binary_search(&r).ok().map(|p| (pattern.col_ptr[c] + p) as u32)
+        };
+        let tied = model
+            .elements
+            .iter()
+            .map(|el| {
+                if !is_tied(el) {
+                    return Vec::new();
+                }
+                let globals: [usize; ELEMENT_DOFS] = std::array::from_fn(|i| NODE_DOFS * el.nodes[i / NODE_DOFS] + i % NODE_DOFS);
+                let exp: Vec<Vec<(usize, f64)>> = globals.iter().map(|&g| model.dofs.expand(g)).collect();
+                let mut list = Vec::new();
+                for i in 0..ELEMENT_DOFS {
+                    for j in 0..ELEMENT_DOFS {
+                        let direct = model.dofs.tie_of[globals[i]] == UNTIED && model.dofs.tie_of[globals[j]] == UNTIED;
+                        if direct {
+                            continue;
+                        }
+                        for &(r, wr) in &exp[i] {
+                            for &(c, wc) in &exp[j] {
+                                if r <= c
+                                    && let Some(s) = slot_of(r, c)
+                                {
+                                    list.push(((i * ELEMENT_DOFS + j) as u16, s, wr * wc));
+                                }
+                            }
+                        }
+                    }
+                }
+                list
+            })
+            .collect();
+        let rules: Vec<Result<SectionRule, ElementFailure>> = model.sections.iter().map(SectionRule::new).collect();
+        let geometry = (0..model.elements.len())
+            .into_par_iter()
+            .map(|e| match &rules[model.elements[e].section] {
+                Ok(rule) => model.element(e).geometry(rule),
+                Err(f) => Err(f.clone()),
+            })
+            .collect();
+        Self { pattern, slots, rules, geometry, tied }
     }
 
     /// Number of stored entries of the upper triangle.
@@ -147,7 +234,9 @@ impl Assembler {
                     let def = &model.elements[e];
                     let x = def.nodes.map(|n| state.u[n]);
                     let frames = def.nodes.map(|n| state.frames[n]);
-                    model.element(e).response(&x, &frames, with_tangent).map_err(|failure| AssemblyFailure { element: e, failure })
+                    let rule = self.rules[def.section].as_ref().map_err(|f| AssemblyFailure { element: e, failure: f.clone() })?;
+                    let geom = self.geometry[e].as_ref().map_err(|f| AssemblyFailure { element: e, failure: f.clone() })?;
+                    model.element(e).response_with(rule, geom, &x, &frames, with_tangent).map_err(|failure| AssemblyFailure { element: e, failure })
                 })
                 .collect();
             for (e, out) in (start..end).zip(outputs) {
@@ -167,10 +256,15 @@ impl Assembler {
                             }
                         }
                     }
+                    for &(ij, s, w) in &self.tied[e] {
+                        let ij = ij as usize;
+                        v[s as usize] += w * k[(ij / ELEMENT_DOFS, ij % ELEMENT_DOFS)];
+                    }
                 }
             }
             start = end;
         }
+        model.dofs.fold(f_int);
         Ok(AssemblyInfo { energy, seconds: t0.elapsed().as_secs_f64() })
     }
 }

@@ -2,6 +2,7 @@
 
 pub mod atomic;
 pub mod export;
+pub mod modes;
 pub mod plot;
 pub mod pvd;
 pub mod vtu;

@@ -26,7 +26,10 @@ pub struct NeoHookean {
 /// Full 3D state of the material at given C.
 struct Full {
     stress: Matrix3<f64>,
+    /// 6×6 tangent (zero unless requested).
     tangent: SMatrix<f64, 6, 6>,
+    /// ℂ3333, always computed (the plane-stress iteration's slope is ½ ℂ3333).
+    c3333: f64,
     energy: f64,
 }
 
@@ -36,8 +39,9 @@ impl NeoHookean {
         Self { bulk, shear }
     }
 
-    /// Stress, 6×6 Voigt tangent (engineering shear) and energy at right Cauchy–Green C.
-    fn full(&self, c: &Matrix3<f64>) -> Result<Full, MaterialFailure> {
+    /// Stress, 6×6 Voigt tangent (engineering shear, when `with_tangent`), ℂ3333 and energy
+    /// at right Cauchy–Green C.
+    fn full(&self, c: &Matrix3<f64>, with_tangent: bool) -> Result<Full, MaterialFailure> {
         let det = c.determinant();
         if !(det > 0.0) || !det.is_finite() {
             return Err(MaterialFailure::Inverted { det_c: det });
@@ -54,7 +58,8 @@ impl NeoHookean {
         let cc = 2.0 / 3.0 * mu * jm23;
         let delta = |i: usize, j: usize| if i == j { 1.0 } else { 0.0 };
         let mut tangent = SMatrix::<f64, 6, 6>::zeros();
-        for (p, &(i, jj)) in PAIRS.iter().enumerate() {
+        let c3333 = a * ci[(2, 2)] * ci[(2, 2)] - b * 0.5 * (ci[(2, 2)] * ci[(2, 2)] + ci[(2, 2)] * ci[(2, 2)]) - cc * (ci[(2, 2)] + ci[(2, 2)]);
+        for (p, &(i, jj)) in PAIRS.iter().enumerate().filter(|_| with_tangent) {
             for (q, &(kk, l)) in PAIRS.iter().enumerate() {
                 tangent[(p, q)] = a * ci[(i, jj)] * ci[(kk, l)]
                     - b * 0.5 * (ci[(i, kk)] * ci[(jj, l)] + ci[(i, l)] * ci[(jj, kk)])
@@ -62,7 +67,7 @@ impl NeoHookean {
             }
         }
         let energy = 0.25 * k * (j2 - 1.0) - 0.5 * k * j.ln() + 0.5 * mu * (jm23 * i1 - 3.0);
-        Ok(Full { stress, tangent, energy })
+        Ok(Full { stress, tangent, c3333, energy })
     }
 }
 
@@ -99,7 +104,7 @@ impl ShellMaterial for NeoHookean {
         let mut full = None;
         for _ in 0..100 {
             c[(2, 2)] = c33;
-            let f = match self.full(&c) {
+            let f = match self.full(&c, false) {
                 Ok(f) => f,
                 Err(_) => {
                     lo = lo.max(c33);
@@ -109,7 +114,8 @@ impl ShellMaterial for NeoHookean {
             };
             let s33 = f.stress[(2, 2)];
             if s33.abs() <= tol {
-                full = Some(f);
+                // Same C as the converged iterate: the full tangent only once.
+                full = Some(self.full(&c, true)?);
                 break;
             }
             if s33 > 0.0 {
@@ -118,7 +124,7 @@ impl ShellMaterial for NeoHookean {
                 lo = lo.max(c33);
             }
             // dS33/dC33 = ½ ℂ3333.
-            let slope = 0.5 * f.tangent[(2, 2)];
+            let slope = 0.5 * f.c3333;
             let mut next = c33 - s33 / slope;
             if !(slope > 0.0) || !(next > lo && next < hi) {
                 next = if hi.is_finite() { 0.5 * (lo + hi) } else { 2.0 * c33 };
@@ -129,7 +135,7 @@ impl ShellMaterial for NeoHookean {
             Some(f) => f,
             None => {
                 c[(2, 2)] = c33;
-                let residual = self.full(&c).map(|f| f.stress[(2, 2)].abs()).unwrap_or(f64::NAN);
+                let residual = self.full(&c, false).map(|f| f.stress[(2, 2)].abs()).unwrap_or(f64::NAN);
                 return Err(MaterialFailure::PlaneStress { residual });
             }
         };

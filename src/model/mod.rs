@@ -37,6 +37,8 @@ pub struct PartInfo {
     pub first_element: usize,
     /// Number of elements.
     pub n_elements: usize,
+    /// Mass per reference area (0: massless), for lumped masses.
+    pub areal_density: f64,
 }
 
 /// A named load pattern; its magnitude is scaled by the step's factor for this name.
@@ -59,13 +61,39 @@ pub enum LoadKind {
     Displacements(Vec<(usize, f64)>),
 }
 
+/// Marker in [`DofMap::tie_of`] for a DOF that is not the slave of a tie.
+pub const UNTIED: u32 = u32::MAX;
+
+/// A multipoint constraint on one DOF component (master–slave tie, e.g. a seam):
+/// u_s = Σ_m w_m u_m + c·λ, with λ the scale of load pattern `load` (a moving offset that
+/// drives a seam gap closed) or 0. Eliminated by the master–slave transformation u = T û
+/// (Cook et al. 2002, §9.2; Felippa, IFEM ch. 8): K̂ = Tᵀ K T, f̂ = Tᵀ f, so the reduced
+/// system stays symmetric positive definite without multipliers.
+#[derive(Clone, Debug)]
+pub struct Tie {
+    /// Global DOF (5 n + k) of the slave.
+    pub slave: usize,
+    /// Global master DOFs and weights.
+    pub masters: Vec<(usize, f64)>,
+    /// Offset c of the slave from the weighted masters at unit load scale.
+    pub offset: f64,
+    /// Load pattern scaling the offset.
+    pub load: Option<usize>,
+}
+
 /// Numbering of the free DOFs.
 #[derive(Clone, Debug)]
 pub struct DofMap {
-    /// Equation number of each global DOF, or [`FIXED`].
+    /// Equation number of each global DOF, or [`FIXED`] (fixed, prescribed or tied slave).
     pub eq: Vec<usize>,
     /// Number of equations.
     pub n_free: usize,
+    /// Ties after substitution of chained slaves (no master is a slave).
+    pub ties: Vec<Tie>,
+    /// For each global DOF, the index of the tie it is the slave of, or [`UNTIED`].
+    pub tie_of: Vec<u32>,
+    /// For each tie, its free masters as (equation, weight).
+    pub tie_eqs: Vec<Vec<(usize, f64)>>,
 }
 
 impl DofMap {
@@ -83,7 +111,138 @@ impl DofMap {
                 }
             })
             .collect();
-        Self { eq, n_free }
+        Self { eq, n_free, ties: Vec::new(), tie_of: vec![UNTIED; fixed.len()], tie_eqs: Vec::new() }
+    }
+
+    /// Numbers every DOF that is neither flagged in `fixed` nor the slave of one of `ties`.
+    /// Chains (a master that is itself a slave) are substituted; a slave that is also fixed
+    /// is dropped when all its masters are fixed (consistent), and is an error otherwise.
+    pub fn with_ties(fixed: &[bool], ties: Vec<Tie>) -> Result<Self, String> {
+        let n = fixed.len();
+        let mut slave_of = vec![UNTIED; n];
+        for (i, t) in ties.iter().enumerate() {
+            if t.slave >= n || t.masters.iter().any(|&(m, _)| m >= n) {
+                return Err(format!("tie {i} refers to a DOF beyond the model's {n} DOFs"));
+            }
+            if slave_of[t.slave] != UNTIED {
+                return Err(format!("DOF {} (node {}) is the slave of two ties", t.slave, t.slave / NODE_DOFS));
+            }
+            slave_of[t.slave] = i as u32;
+        }
+        // Substitute chained masters until every master is independent.
+        let mut resolved = ties.clone();
+        for t in resolved.iter_mut() {
+            for _round in 0..=ties.len() {
+                if !t.masters.iter().any(|&(m, _)| slave_of[m] != UNTIED) {
+                    break;
+                }
+                let mut next: Vec<(usize, f64)> = Vec::new();
+                for &(m, w) in &t.masters {
+                    let j = slave_of[m];
+                    if j == UNTIED {
+                        next.push((m, w));
+                    } else {
+                        let u = &ties[j as usize];
+                        if u.offset != 0.0 {
+                            if t.offset == 0.0 {
+                                t.load = u.load;
+                            } else if t.load != u.load {
+                                return Err(format!(
+                                    "chained ties at node {} close their gaps with different load patterns",
+                                    t.slave / NODE_DOFS
+                                ));
+                            }
+                            t.offset += w * u.offset;
+                        }
+                        next.extend(u.masters.iter().map(|&(mm, ww)| (mm, w * ww)));
+                    }
+                }
+                if next.iter().any(|&(m, _)| m == t.slave) {
+                    return Err(format!("ties form a cycle through DOF {} (node {})", t.slave, t.slave / NODE_DOFS));
+                }
+                t.masters = next;
+            }
+            if t.masters.iter().any(|&(m, _)| slave_of[m] != UNTIED) {
+                return Err(format!("ties form a cycle through DOF {} (node {})", t.slave, t.slave / NODE_DOFS));
+            }
+            // Merge repeated masters.
+            t.masters.sort_by_key(|&(m, _)| m);
+            t.masters.dedup_by(|b, a| {
+                if a.0 == b.0 {
+                    a.1 += b.1;
+                    true
+                } else {
+                    false
+                }
+            });
+            t.masters.retain(|&(_, w)| w != 0.0);
+        }
+        let mut kept = Vec::with_capacity(resolved.len());
+        for t in resolved {
+            if fixed[t.slave] {
+                if t.masters.iter().all(|&(m, _)| fixed[m]) {
+                    continue;
+                }
+                return Err(format!(
+                    "node {} is supported but tied to free nodes; support both sides of the seam or neither",
+                    t.slave / NODE_DOFS
+                ));
+            }
+            kept.push(t);
+        }
+        let mut no_eq = fixed.to_vec();
+        for t in &kept {
+            no_eq[t.slave] = true;
+        }
+        let mut map = Self::new(&no_eq);
+        map.tie_of = vec![UNTIED; n];
+        for (i, t) in kept.iter().enumerate() {
+            map.tie_of[t.slave] = i as u32;
+        }
+        map.tie_eqs = kept
+            .iter()
+            .map(|t| t.masters.iter().filter(|&&(m, _)| map.eq[m] != FIXED).map(|&(m, w)| (map.eq[m], w)).collect())
+            .collect();
+        map.ties = kept;
+        Ok(map)
+    }
+
+    /// Increment of global DOF `g` from the free-DOF increment `du`: its own entry, the
+    /// weighted masters' entries for a tied slave, or None for a fixed DOF.
+    #[inline]
+    pub fn increment(&self, g: usize, du: &[f64]) -> Option<f64> {
+        let e = self.eq[g];
+        if e != FIXED {
+            return Some(du[e]);
+        }
+        let t = self.tie_of[g];
+        if t == UNTIED {
+            return None;
+        }
+        Some(self.tie_eqs[t as usize].iter().map(|&(m, w)| w * du[m]).sum())
+    }
+
+    /// Equations and weights global DOF `g` maps to: its own equation (weight 1), a tied
+    /// slave's free masters, or none for a fixed DOF (a row of the transformation T).
+    pub fn expand(&self, g: usize) -> Vec<(usize, f64)> {
+        if self.eq[g] != FIXED {
+            return vec![(self.eq[g], 1.0)];
+        }
+        match self.tie_of[g] {
+            UNTIED => Vec::new(),
+            t => self.tie_eqs[t as usize].clone(),
+        }
+    }
+
+    /// Folds the generalised forces of tied slaves onto their masters, f_m += w f_s (the
+    /// Tᵀ f of the master–slave transformation); slave entries are kept (tie forces).
+    pub fn fold(&self, f: &mut [f64]) {
+        for t in &self.ties {
+            let fs = f[t.slave];
+            for &(m, w) in &t.masters {
+                f[m] += w * fs;
+            }
+        }
     }
 }
 
@@ -169,6 +328,7 @@ impl Model {
                 LoadKind::Displacements(_) => {}
             }
         }
+        self.dofs.fold(out);
     }
 
     /// Sets prescribed translations to their values at load scales `scales`.
@@ -181,6 +341,15 @@ impl Model {
                 }
             }
         }
+        // Tied slave translations follow their masters (and any moving offset) exactly.
+        for t in &self.dofs.ties {
+            if t.slave % NODE_DOFS >= 3 || t.masters.iter().any(|&(m, _)| m % NODE_DOFS >= 3) {
+                continue;
+            }
+            let lambda = t.load.and_then(|l| scales.get(l).copied()).unwrap_or(0.0);
+            let v: f64 = t.masters.iter().map(|&(m, w)| w * state.u[m / NODE_DOFS][m % NODE_DOFS]).sum::<f64>() + t.offset * lambda;
+            state.u[t.slave / NODE_DOFS][t.slave % NODE_DOFS] = v;
+        }
     }
 
     /// Adds `step` × the free-DOF increment `du` to `state` (translations added, tilts
@@ -192,10 +361,12 @@ impl Model {
             for k in 0..3 {
                 if eq[base + k] != FIXED {
                     state.u[n][k] += step * du[eq[base + k]];
+                } else if let Some(d) = self.dofs.increment(base + k, du) {
+                    state.u[n][k] += step * d;
                 }
             }
-            let a1 = if eq[base + 3] != FIXED { step * du[eq[base + 3]] } else { 0.0 };
-            let a2 = if eq[base + 4] != FIXED { step * du[eq[base + 4]] } else { 0.0 };
+            let a1 = self.dofs.increment(base + 3, du).map_or(0.0, |d| step * d);
+            let a2 = self.dofs.increment(base + 4, du).map_or(0.0, |d| step * d);
             if a1 != 0.0 || a2 != 0.0 {
                 state.frames[n] = state.frames[n].tilted([a1, a2]);
             }

@@ -41,6 +41,14 @@ pub struct BuiltScene {
     pub quality: Vec<(String, MeshQuality)>,
     /// Rigid bodies and contact controls.
     pub contact: Option<crate::contact::ContactSetup>,
+    /// Buckling-mode imperfection to seed before the solve.
+    pub imperfection: Option<crate::solver::imperfection::Imperfection>,
+    /// Seams (ties) of the model.
+    pub seams: Vec<crate::garment::SeamInfo>,
+    /// Warnings (e.g. garment panels neither seamed nor supported), located in the file.
+    pub warnings: Vec<String>,
+    /// Panel, ply and material ids and the flat pattern, when the scene has a garment.
+    pub garment: Option<crate::garment::export::GarmentLayout>,
 }
 
 fn v3(a: [f64; 3]) -> Vector3<f64> {
@@ -93,7 +101,7 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
     }
 
     // Parts and meshes.
-    if scene.parts.is_empty() {
+    if scene.parts.is_empty() && scene.garment.is_none() {
         return Err(loc.at(None, Some("parts"), "parts", "expected at least one part"));
     }
     let mut x0 = Vec::new();
@@ -140,7 +148,10 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
         }
         // Materials with a through-thickness law (fabric) fix their own rule.
         let thickness_points = material.thickness_points().unwrap_or(p.thickness_points);
-        let m = make_mesh(&p.mesh, base_dir).map_err(|e| loc.at(Some(&p.name), Some("mesh"), format!("{field}.mesh"), e.to_string()))?;
+        let mut m = make_mesh(&p.mesh, base_dir).map_err(|e| loc.at(Some(&p.name), Some("mesh"), format!("{field}.mesh"), e.to_string()))?;
+        if let Some(o) = p.offset {
+            m.nodes.iter_mut().for_each(|x| *x += v3(o));
+        }
         quality.push((p.name.clone(), m.quality()));
         let first_node = x0.len();
         let first_element = elements.len();
@@ -151,8 +162,45 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
         }
         x0.extend_from_slice(&m.nodes);
         d0.extend_from_slice(&m.directors);
-        parts.push(PartInfo { name: p.name.clone(), first_node, n_nodes: m.nodes.len(), first_element, n_elements: m.quads.len() });
+        let gravity_density = scene.loads.values().find_map(|l| match l {
+            LoadSpec::Gravity { part, areal_density, .. } if *part == p.name => Some(*areal_density),
+            _ => None,
+        });
+        if !(p.areal_density.is_finite() && p.areal_density >= 0.0) {
+            return Err(loc.at(Some(&p.name), Some("areal_density"), format!("{field}.areal_density"), "expected a non-negative mass per area"));
+        }
+        let areal_density = if p.areal_density > 0.0 { p.areal_density } else { gravity_density.unwrap_or(0.0) };
+        parts.push(PartInfo { name: p.name.clone(), first_node, n_nodes: m.nodes.len(), first_element, n_elements: m.quads.len(), areal_density });
         meshes.push(m);
+    }
+    // Garment plies as further parts.
+    let material_names: std::collections::BTreeSet<String> = materials.keys().map(|k| k.to_string()).collect();
+    let garment = match &scene.garment {
+        Some(g) => Some((g, crate::garment::GarmentMesh::build(g, &loc, &material_names)?)),
+        None => None,
+    };
+    let mut garment_first_node = Vec::new();
+    let garment_first_part = parts.len();
+    if let Some((_, gm)) = &garment {
+        for gp in &gm.parts {
+            let material = materials.get(gp.material.as_str()).cloned().ok_or_else(|| loc.at_value(&gp.name, &gp.material, "garment.plies", "unknown material"))?;
+            let (first_node, first_element) = (x0.len(), elements.len());
+            sections.push(Section { thickness: gp.thickness, shear: Default::default(), thickness_points: 2, material });
+            for (q, g) in gp.mesh.quads.iter().zip(&gp.grains) {
+                elements.push(ElementDef { nodes: q.map(|n| n + first_node), section: sections.len() - 1, part: parts.len(), grain: Some(*g) });
+            }
+            x0.extend_from_slice(&gp.mesh.nodes);
+            d0.extend_from_slice(&gp.mesh.directors);
+            quality.push((gp.name.clone(), gp.mesh.quality()));
+            let gravity_density = scene.loads.values().find_map(|l| match l {
+                LoadSpec::Gravity { part, areal_density, .. } if *part == gp.name => Some(*areal_density),
+                _ => None,
+            });
+            let areal_density = if gp.areal_density > 0.0 { gp.areal_density } else { gravity_density.unwrap_or(0.0) };
+            parts.push(PartInfo { name: gp.name.clone(), first_node, n_nodes: gp.mesh.nodes.len(), first_element, n_elements: gp.mesh.quads.len(), areal_density });
+            garment_first_node.push(first_node);
+            meshes.push(gp.mesh.clone());
+        }
     }
     let n_nodes = x0.len();
     let part_index = |name: &str| parts.iter().position(|p: &PartInfo| p.name == name);
@@ -345,6 +393,7 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
                 }
                 LoadKind::Displacements(nodes.iter().map(|&n| (NODE_DOFS * n + k, *value)).collect())
             }
+            LoadSpec::Closure => LoadKind::Forces(Vec::new()),
         };
         loads.push(Load { name: name.clone(), kind });
     }
@@ -360,6 +409,11 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
         if s.increments == 0 {
             return Err(loc.at(Some(&s.name), Some("increments"), format!("{field}.increments"), "expected at least one increment"));
         }
+        if let crate::solver::StepKind::Dynamic(ds) = &s.kind {
+            if let Some((key, msg)) = crate::solver::dynamics::check_settings(ds) {
+                return Err(loc.at(Some(&s.name), Some(key), format!("{field}.kind.{key}"), msg));
+            }
+        }
         for (lname, &v) in &s.scale {
             let Some(i) = loads.iter().position(|l| &l.name == lname) else {
                 let known: Vec<&str> = loads.iter().map(|l| l.name.as_str()).collect();
@@ -371,7 +425,8 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
             current[i] = v;
         }
         let _ = si;
-        steps.push(StepPlan { name: s.name.clone(), increments: s.increments, linear: s.linear, target_scales: current.clone() });
+        let kind = super::path::resolve_step_kind(s, &field, &loc, &node_sets, &loads, &fixed)?;
+        steps.push(StepPlan { name: s.name.clone(), increments: s.increments, linear: s.linear, target_scales: current.clone(), kind });
     }
 
     // Monitors.
@@ -406,9 +461,27 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
             return Err(loc.at(None, Some("drape"), "drape", "expected 0 < disc_radius < specimen_radius and a positive resolution"));
         }
     }
-    let dofs = DofMap::new(&fixed);
+    let imperfection = scene.imperfection.as_ref().map(|imp| super::path::resolve_imperfection(imp, &loc, &loads)).transpose()?;
+    let (mut ties, mut seams) = crate::garment::build_scene_seams(&scene.seams, &loc, &node_sets, &loads, &x0, &mut frames0)?;
+    let mut warnings = Vec::new();
+    let mut layout = None;
+    if let Some((g, gm)) = &garment {
+        layout = Some(gm.layout(g, garment_first_part, &garment_first_node, x0.len()));
+        let (t, s) = gm.ties(g, &loc, &garment_first_node, &loads, &x0, &mut frames0)?;
+        ties.extend(t);
+        seams.extend(s);
+        let supported: Vec<bool> = gm
+            .parts
+            .iter()
+            .zip(&garment_first_node)
+            .map(|(p, &f)| fixed[NODE_DOFS * f..NODE_DOFS * (f + p.mesh.nodes.len())].iter().any(|&x| x))
+            .collect();
+        warnings.extend(gm.unsupported(g, &loc, &supported).into_iter().map(|e| e.to_string()));
+    }
+    crate::garment::apply_tapes(&seams, &x0, &mut elements, &mut sections);
+    let dofs = DofMap::with_ties(&fixed, ties).map_err(|e| loc.at(None, Some("seams"), "seams", e))?;
     let model = Model { x0, frames0, elements, sections, parts, dofs, loads };
-    Ok(BuiltScene { model, steps, monitors, node_sets, quality, contact })
+    Ok(BuiltScene { model, steps, monitors, node_sets, quality, imperfection, seams, warnings, garment: layout, contact })
 }
 
 fn check_young_poisson(young: f64, poisson: f64, bad: &dyn Fn(&str, &str) -> SceneError) -> Result<(), SceneError> {

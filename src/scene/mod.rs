@@ -3,6 +3,7 @@
 mod build;
 mod error;
 mod fabric_spec;
+mod path;
 mod spec;
 
 pub use build::{build, BuiltScene, Monitor};

@@ -5,7 +5,7 @@ use std::collections::BTreeMap;
 use serde::{Deserialize, Serialize};
 
 use crate::element::ShearTreatment;
-use crate::solver::SolverSettings;
+use crate::solver::{SolverSettings, StepKind};
 
 /// A whole analysis: parts, materials, supports, loads, steps and outputs.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -46,7 +46,60 @@ pub struct Scene {
     /// Drape measures to report (Cusick drape coefficient, folds, penetration).
     #[serde(default)]
     pub drape: Option<DrapeSpec>,
+    /// Geometric imperfection seeded into the reference geometry before the solve.
+    #[serde(default)]
+    pub imperfection: Option<ImperfectionSpec>,
+    /// Seams: master–slave ties between node rows of the parts.
+    #[serde(default)]
+    pub seams: Vec<SeamSpec>,
+    /// A garment (panels, plies, seams, stitch lines) whose plies become further parts.
+    #[serde(default)]
+    pub garment: Option<crate::garment::GarmentSpec>,
 }
+
+/// Geometric imperfections (added to the reference mid-surface and directors).
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum ImperfectionSpec {
+    /// Buckling modes of the perfect geometry: a linearized buckling analysis at the
+    /// reference state under the load patterns scaled by `scale`; mode k (from 1) is added
+    /// scaled to a largest translation of `amplitude` (a length).
+    BucklingModes { scale: BTreeMap<String, f64>, modes: Vec<ModeAmplitude> },
+    /// A seeded Gaussian random field along the reference directors with squared-exponential
+    /// covariance of correlation length `correlation_length`, scaled to a largest
+    /// displacement of `amplitude`; the directors follow the perturbed surface.
+    RandomField { amplitude: f64, correlation_length: f64, #[serde(default)] seed: u64 },
+}
+
+/// One mode of a buckling-mode imperfection.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ModeAmplitude {
+    /// Mode number, 1 = lowest critical load.
+    pub mode: usize,
+    /// Largest translation of the mode's contribution.
+    pub amplitude: f64,
+}
+
+
+/// A seam between two ordered node sets (e.g. `Edge` selectors), running the same way.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SeamSpec {
+    /// Seam name.
+    pub name: String,
+    /// Master node row (a node set).
+    pub master: String,
+    /// Slave node row (a node set); make the finer row the slave.
+    pub slave: String,
+    /// Plain (hinge), Welded or Taped.
+    pub kind: crate::garment::SeamKind,
+    /// A `Closure` load pattern whose scale drives the initial gap between the rows to zero
+    /// (virtual sewing); without it the initial gap is kept.
+    #[serde(default)]
+    pub closing: Option<String>,
+}
+
 
 /// Rigid bodies the shell parts touch, and the contact controls.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -111,7 +164,8 @@ pub struct BodySpec {
     pub friction: f64,
     /// Kinetic coefficient (default: equal to `friction`).
     #[serde(default)]
-    pub kinetic_friction: Option<f64>,    /// Edge rounding radius of a box or cylinder (its outer dimensions are kept).
+    pub kinetic_friction: Option<f64>,
+    /// Edge rounding radius of a box or cylinder (its outer dimensions are kept).
     #[serde(default)]
     pub rounding: f64,
 }
@@ -222,6 +276,13 @@ pub struct PartSpec {
     /// Lamina e1 direction (material grain); default the element's ξ direction.
     #[serde(default)]
     pub grain: Option<[f64; 3]>,
+    /// Rigid translation applied to the generated mesh.
+    #[serde(default)]
+    pub offset: Option<[f64; 3]>,
+    /// Mass per reference area for `Dynamic` steps; 0 (default): the areal density of a
+    /// Gravity load on this part, else massless.
+    #[serde(default)]
+    pub areal_density: f64,
 }
 
 fn two() -> usize {
@@ -329,6 +390,8 @@ pub enum LoadSpec {
     Displacement { set: String, dof: Dof, value: f64 },
     /// Self-weight of a part from its material's areal density (fabric) and gravity vector.
     SelfWeight { part: String, g: [f64; 3] },
+    /// No force: its scale (0 → 1) closes the gaps of the seams that name it (sewing).
+    Closure,
 }
 
 /// A solution step: load scales ramped linearly over its increments.
@@ -347,6 +410,12 @@ pub struct StepSpec {
     /// they had at the end of the previous step.
     #[serde(default)]
     pub scale: BTreeMap<String, f64>,
+    /// How the step is solved: `Static` (default), `StaticDamped` (Levenberg–Marquardt
+    /// shift) or `Dynamic((dt: .., ..))` (pseudo-transient; `increments` is then unused and
+    /// every accepted time step is reported), `ArcLength(..)` / `DisplacementControl(..)` (path
+    /// following through limit points) or `Buckling(modes: ..)` (linearized buckling).
+    #[serde(default)]
+    pub kind: StepKind,
 }
 
 /// A monitored point: the node nearest to `point`, with the displacement components kept.

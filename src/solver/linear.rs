@@ -7,7 +7,8 @@ use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::cholesky::ldlt::factor::LdltRegularization;
 use faer::linalg::cholesky::llt::factor::LltRegularization;
 use faer::sparse::linalg::cholesky::{
-    factorize_symbolic_cholesky, CholeskySymbolicParams, LdltRef, LltRef, SymbolicCholesky, SymmetricOrdering,
+    factorize_symbolic_cholesky, simplicial, supernodal, CholeskySymbolicParams, LdltRef, LltRef, SymbolicCholesky,
+    SymbolicCholeskyRaw, SymmetricOrdering,
 };
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat, SymbolicSparseColMatRef};
 use faer::{Conj, MatMut, Par, Side};
@@ -74,6 +75,11 @@ impl SparseCholesky {
         Ok(Self { pattern: sym, symbolic, l_values, buffer, kind: FactorKind::Llt, par })
     }
 
+    /// Which factorization the last successful numeric step produced.
+    pub fn kind(&self) -> FactorKind {
+        self.kind
+    }
+
     /// Number of stored values of the factor.
     pub fn factor_nnz(&self) -> usize {
         self.l_values.len()
@@ -126,6 +132,60 @@ impl SparseCholesky {
             FactorKind::Llt => LltRef::new(&self.symbolic, &self.l_values).solve_in_place_with_conj(Conj::No, mat, self.par, stack),
             FactorKind::Ldlt => LdltRef::new(&self.symbolic, &self.l_values).solve_in_place_with_conj(Conj::No, mat, self.par, stack),
         }
+    }
+
+    /// Inertia of the last factorized matrix: the number of negative pivots of D in
+    /// P A Pᵀ = L D Lᵀ (0 after a successful LLᵀ). L is unit lower triangular, so A is
+    /// congruent to D and by Sylvester's law of inertia A has exactly as many negative
+    /// eigenvalues as D has negative entries. The LDLᵀ runs without pivoting and without
+    /// regularization (`LdltRegularization::default()` has no sign enforcement), so the
+    /// signs are those of the exact factorization whenever it exists and is computed stably.
+    pub fn negative_pivots(&self) -> usize {
+        if self.kind == FactorKind::Llt {
+            return 0;
+        }
+        self.pivots().iter().filter(|d| **d < 0.0).count()
+    }
+
+    /// The pivots of the last factorization: D of L D Lᵀ, or the squared diagonal of L
+    /// after LLᵀ (in elimination order).
+    pub fn pivots(&self) -> Vec<f64> {
+        let square = self.kind == FactorKind::Llt;
+        let mut out = Vec::with_capacity(self.symbolic.nrows());
+        match self.symbolic.raw() {
+            SymbolicCholeskyRaw::Simplicial(sym) => {
+                // Each column of the simplicial factor stores its diagonal first.
+                let cp = sym.col_ptr();
+                let l = simplicial::SimplicialLdltRef::<'_, usize, f64>::new(sym, &self.l_values);
+                let v = l.values();
+                for j in 0..sym.ncols() {
+                    out.push(v[cp[j]]);
+                }
+            }
+            SymbolicCholeskyRaw::Supernodal(sym) => {
+                // The top block of each supernode holds the diagonal block of the factor.
+                let l = supernodal::SupernodalLdltRef::<'_, usize, f64>::new(sym, &self.l_values);
+                for s in 0..sym.n_supernodes() {
+                    let m = l.supernode(s).val();
+                    for j in 0..m.ncols() {
+                        out.push(m[(j, j)]);
+                    }
+                }
+            }
+        }
+        if square {
+            out.iter_mut().for_each(|d| *d *= *d);
+        }
+        out
+    }
+
+    /// Smallest over largest pivot magnitude of the last factorization: a cheap
+    /// conditioning indicator (round-off level means a mechanism or a critical point).
+    pub fn pivot_ratio(&self) -> f64 {
+        let p = self.pivots();
+        let lo = p.iter().fold(f64::INFINITY, |m, d| m.min(d.abs()));
+        let hi = p.iter().fold(0.0f64, |m, d| m.max(d.abs()));
+        if hi > 0.0 { lo / hi } else { 0.0 }
     }
 
     /// y = A x for the symmetric matrix stored as its upper triangle with `values`.
@@ -193,6 +253,37 @@ mod tests {
             chol.multiply(&vneg, &x, &mut ax);
             let err = ax.iter().zip(&b).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
             assert!(err < 1e-8, "m={m} indefinite: residual {err}");
+        }
+    }
+
+    /// The negative-pivot count equals the number of negative eigenvalues (Sylvester's law
+    /// of inertia) for shifted 5-point Laplacians, whose eigenvalues are known in closed form:
+    /// λ_ij = d − 2cos(iπ/(m+1)) − 2cos(jπ/(m+1)) for diagonal d. Small m exercises the
+    /// simplicial factor, large m the supernodal one.
+    #[test]
+    fn negative_pivots_count_negative_eigenvalues() {
+        for m in [6, 40, 150] {
+            let (p, v) = laplacian(m);
+            let mut chol = SparseCholesky::analyse(&p, 1).unwrap();
+            let supernodal = matches!(chol.symbolic.raw(), SymbolicCholeskyRaw::Supernodal(_));
+            if m != 40 {
+                assert_eq!(supernodal, m > 40, "m={m}: expected the other factor storage");
+            }
+            for shift in [0.0, 1.3, 2.7, 4.6] {
+                let d = 4.01 - shift;
+                let vs: Vec<f64> = v.iter().map(|&a| if a > 0.0 { d } else { a }).collect();
+                chol.factorize(&vs).unwrap();
+                let h = std::f64::consts::PI / (m + 1) as f64;
+                let mut expected = 0;
+                for i in 1..=m {
+                    for j in 1..=m {
+                        if d - 2.0 * (h * i as f64).cos() - 2.0 * (h * j as f64).cos() < 0.0 {
+                            expected += 1;
+                        }
+                    }
+                }
+                assert_eq!(chol.negative_pivots(), expected, "m={m} shift={shift}");
+            }
         }
     }
 }

@@ -1,9 +1,19 @@
 //! Nonlinear solution: load stepping with Newton–Raphson, line search and cut-back.
 
+pub mod arclength;
+pub mod damped;
+pub mod diagnose;
+pub mod dynamics;
+pub mod eigen;
 pub mod extra;
+pub mod imperfection;
 pub mod linear;
 pub mod newton;
+pub mod nodal;
 
+pub use dynamics::{DynamicInfo, DynamicSettings, LumpedMass, TimeScheme};
+pub use eigen::BucklingReport;
+pub use nodal::NodalForces;
 pub use newton::{IncrementReport, Progress, SolveError, Solver, StepPlan, Timings};
 
 use serde::{Deserialize, Serialize};
@@ -32,4 +42,74 @@ impl Default for SolverSettings {
     fn default() -> Self {
         Self { max_iterations: 30, residual_tol: 1e-7, energy_tol: 1e-14, line_search: true, max_cutbacks: 10, threads: 0 }
     }
+}
+
+/// How a step is solved.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub enum StepKind {
+    /// Load-controlled Newton–Raphson with cut-back (`newton.rs`).
+    #[default]
+    Static,
+    /// Static Newton with a Levenberg–Marquardt shift K + μ·k̄·I when the tangent is not
+    /// positive definite, μ adapted by a trust-region test on the potential energy and the
+    /// residual (`damped.rs`).
+    StaticDamped,
+    /// Pseudo-transient continuation: implicit (backward-Euler) dynamics with lumped mass
+    /// from the parts' areal density, integrated until the kinetic energy and the static
+    /// residual vanish (`dynamics.rs`).
+    Dynamic(DynamicSettings),
+    /// Arc-length path following (Crisfield 1981, cylindrical constraint on the free
+    /// translations): the load factor λ, with scales = start + λ (target − start), is an
+    /// unknown. `increments` of the step is the maximum number of arc-length increments.
+    ArcLength {
+        /// Initial arc length (norm of the increment of free translations).
+        length: f64,
+        /// Smallest arc length before the step stops with a diagnosis (default length/1000).
+        #[serde(default)]
+        min_length: Option<f64>,
+        /// Largest arc length (default 10 × length).
+        #[serde(default)]
+        max_length: Option<f64>,
+        /// Iterations per increment the arc length is adapted to, Δl ← Δl √(N_d / N).
+        #[serde(default = "default_desired_iterations")]
+        desired_iterations: usize,
+        /// Stop once |λ| reaches this (default 1: the step's target scales).
+        #[serde(default = "one")]
+        max_load_factor: f64,
+        /// Stop once any node's displacement magnitude exceeds this.
+        #[serde(default)]
+        max_displacement: Option<f64>,
+    },
+    /// Displacement control (Batoz & Dhatt 1979): the translation `dof` of the single node
+    /// in `set` is driven from its value at the start of the step by `value` over the
+    /// increments; the load factor λ (scales = start + λ (target − start)) is an unknown.
+    DisplacementControl {
+        /// Node set holding exactly one node.
+        set: String,
+        /// Controlled translation (Ux, Uy or Uz).
+        dof: crate::scene::Dof,
+        /// Change of the controlled displacement over the step.
+        value: f64,
+        /// Global DOF index, resolved when the scene is built.
+        #[serde(skip)]
+        global_dof: usize,
+    },
+    /// Linearized buckling at the current state: (K_T + λ K_Δ) φ = 0 for the lowest
+    /// `modes` eigenpairs, K_Δ the derivative of the tangent along the prebuckling path of
+    /// the step's load change (target − start). Writes the modes as VTU point fields.
+    Buckling {
+        /// Number of eigenpairs.
+        modes: usize,
+        /// Spectral shift σ (modes nearest above σ); K_T − σ(−K_Δ) must be positive definite.
+        #[serde(default)]
+        shift: f64,
+    },
+}
+
+fn default_desired_iterations() -> usize {
+    5
+}
+
+fn one() -> f64 {
+    1.0
 }

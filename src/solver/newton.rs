@@ -12,8 +12,9 @@ use std::time::Instant;
 use serde::Serialize;
 
 use super::linear::{FactorKind, SparseCholesky};
-use super::SolverSettings;
+use super::{StepKind, SolverSettings};
 use crate::assembly::{Assembler, AssemblyFailure};
+use super::dynamics::DynamicInfo;
 use crate::element::NODE_DOFS;
 use crate::model::{Model, State, FIXED};
 
@@ -28,6 +29,8 @@ pub struct StepPlan {
     pub linear: bool,
     /// Target scale per load pattern at the end of the step (same order as `Model::loads`).
     pub target_scales: Vec<f64>,
+    /// How the step is solved (static Newton by default).
+    pub kind: StepKind,
 }
 
 /// Wall time split (s).
@@ -50,7 +53,7 @@ pub struct Timings {
 }
 
 /// A converged nominal increment.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Default, Serialize)]
 pub struct IncrementReport {
     /// Step index.
     pub step: usize,
@@ -75,6 +78,28 @@ pub struct IncrementReport {
     /// Reports of the extra contributions for this increment (e.g. contact active set).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub extra: Vec<serde_json::Value>,
+    /// Load factor λ of a path-following step (scales = start + λ (target − start)).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub load_factor: Option<f64>,
+    /// Negative pivots of the tangent at the converged state (its number of negative
+    /// eigenvalues by Sylvester's law; 0 when LLᵀ succeeds).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub negative_pivots: Option<usize>,
+    /// Current stiffness parameter S_p = (f·K⁻¹f)₁ / (f·K⁻¹f) for the step's load change f,
+    /// 1 at the step's first increment (Bergan et al. 1978); its sign changes at a limit point.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stiffness_parameter: Option<f64>,
+    /// "limit point" (negative-pivot count and sign of the stiffness parameter change),
+    /// "bifurcation" (count changes alone) or "displacement turning point" (sign alone,
+    /// a snap-back) when this increment crossed one.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stability_event: Option<String>,
+    /// Linearized buckling results of a `Buckling` step.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub buckling: Option<super::BucklingReport>,
+    /// Time-integration data of a `Dynamic` step (None for static steps).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub dynamics: Option<DynamicInfo>,
 }
 
 /// Progress notification for a bar.
@@ -119,7 +144,7 @@ impl std::fmt::Display for SolveError {
             self.last_converged_time,
             self.cause,
             self.iteration,
-            self.residuals.iter().map(|r| format!("{r:.2e}")).collect::<Vec<_>>().join(", ")
+            residual_history(&self.residuals)
         )?;
         match self.worst_element {
             Some(e) => write!(f, "; worst element {e})"),
@@ -128,21 +153,29 @@ impl std::fmt::Display for SolveError {
     }
 }
 
+/// The residual history for a message: all of it, or the first 4 and last 10 values.
+fn residual_history(r: &[f64]) -> String {
+    let f = |v: &[f64]| v.iter().map(|x| format!("{x:.2e}")).collect::<Vec<_>>().join(", ");
+    if r.len() <= 16 { f(r) } else { format!("{}, … {} more …, {}", f(&r[..4]), r.len() - 14, f(&r[r.len() - 10..])) }
+}
+
 /// Outcome of one attempted increment.
-enum Attempt {
+pub(super) enum Attempt {
     Converged { iterations: usize, residuals: Vec<f64>, indefinite: bool, energy: f64 },
     Failed { iteration: usize, residuals: Vec<f64>, worst_element: Option<usize>, cause: String },
 }
 
 /// A static solver bound to one model.
 pub struct Solver<'m> {
-    model: &'m Model,
-    settings: SolverSettings,
-    assembler: Assembler,
-    cholesky: SparseCholesky,
-    values: Vec<f64>,
-    f_int: Vec<f64>,
-    f_ext: Vec<f64>,
+    pub(super) model: &'m Model,
+    pub(super) settings: SolverSettings,
+    pub(super) assembler: Assembler,
+    pub(super) cholesky: SparseCholesky,
+    pub(super) values: Vec<f64>,
+    pub(super) f_int: Vec<f64>,
+    pub(super) f_ext: Vec<f64>,
+    /// Configuration-dependent nodal forces (contact), if any.
+    pub(super) nodal_forces: Option<Box<dyn super::NodalForces + 'm>>,
     /// Accumulated wall-time split.
     pub timings: Timings,
     /// Extra force/tangent terms added after element assembly.
@@ -168,6 +201,7 @@ impl<'m> Solver<'m> {
             cholesky,
             f_int: vec![0.0; ndof],
             f_ext: vec![0.0; ndof],
+            nodal_forces: None,
             timings,
             extras: Vec::new(),
             extra_reports: Vec::new(),
@@ -184,6 +218,11 @@ impl<'m> Solver<'m> {
         &self.extras
     }
 
+    /// Adds configuration-dependent nodal forces (e.g. contact) to every later assembly.
+    pub fn set_nodal_forces(&mut self, forces: Box<dyn super::NodalForces + 'm>) {
+        self.nodal_forces = Some(forces);
+    }
+
     /// Equations, stored tangent entries (upper triangle) and factor entries.
     pub fn sizes(&self) -> (usize, usize, usize) {
         (self.assembler.pattern.n, self.assembler.nnz(), self.cholesky.factor_nnz())
@@ -195,7 +234,7 @@ impl<'m> Solver<'m> {
     }
 
     /// Free-DOF residual r = f_int − f_ext; returns (‖r‖ / reference, reference).
-    fn residual(&self, r: &mut [f64]) -> (f64, f64) {
+    pub(super) fn residual(&self, r: &mut [f64]) -> (f64, f64) {
         let eq = &self.model.dofs.eq;
         let mut rr = 0.0;
         let mut fe = 0.0;
@@ -212,7 +251,7 @@ impl<'m> Solver<'m> {
         (rr.sqrt() / reference, reference)
     }
 
-    fn assemble(&mut self, state: &State, scales: &[f64], tangent: bool) -> Result<f64, AssemblyFailure> {
+    pub(super) fn assemble(&mut self, state: &State, scales: &[f64], tangent: bool) -> Result<f64, AssemblyFailure> {
         let info = self.assembler.assemble(
             self.model,
             state,
@@ -229,11 +268,29 @@ impl<'m> Solver<'m> {
             self.timings.contact_search = self.extras.iter().map(|c| c.search_seconds()).sum();
         }
         self.model.external_force(state, scales, &mut self.f_ext);
+        if let Some(forces) = &self.nodal_forces {
+            let mut jacobian = Vec::new();
+            if self.model.dofs.ties.is_empty() {
+                forces.add(self.model, state, &mut self.f_ext, &mut jacobian);
+            } else {
+                // Forces on tied slaves fold onto their masters like the other loads.
+                let mut f = vec![0.0; self.f_ext.len()];
+                forces.add(self.model, state, &mut f, &mut jacobian);
+                self.model.dofs.fold(&mut f);
+                self.f_ext.iter_mut().zip(&f).for_each(|(e, v)| *e += v);
+            }
+            if tangent {
+                let p = &self.assembler.pattern;
+                for (n, j) in &jacobian {
+                    super::nodal::add_node_block(self.model, &p.col_ptr, &p.row_idx, &mut self.values, *n, j);
+                }
+            }
+        }
         Ok(info.energy)
     }
 
     /// Element touching the node with the largest free residual.
-    fn worst_element(&self, r: &[f64]) -> Option<usize> {
+    pub(super) fn worst_element(&self, r: &[f64]) -> Option<usize> {
         let eq = &self.model.dofs.eq;
         let mut best = (0.0, None);
         for (g, &e) in eq.iter().enumerate() {
@@ -376,9 +433,36 @@ impl<'m> Solver<'m> {
         let mut scales = vec![0.0; nl];
         let total: usize = steps.iter().map(|s| s.increments.max(1)).sum();
         let mut done_before = 0usize;
+        let mut tracker = super::arclength::StabilityTracker::default();
         for (si, step) in steps.iter().enumerate() {
             let start = scales.clone();
             let n_inc = step.increments.max(1);
+            tracker.new_step();
+            match &step.kind {
+                StepKind::Static | StepKind::StaticDamped => {}
+                StepKind::Dynamic(ds) => {
+                    let frac = (done_before as f64 / total as f64, n_inc as f64 / total as f64);
+                    self.run_dynamic_step(si, step, ds, &start, state, on_increment, progress, frac.0, frac.1)?;
+                    scales = step.target_scales.clone();
+                    done_before += n_inc;
+                    continue;
+                }
+                StepKind::ArcLength { .. } | StepKind::DisplacementControl { .. } => {
+                    let frac0 = done_before as f64 / total as f64;
+                    let frac1 = (done_before + n_inc) as f64 / total as f64;
+                    scales = self.run_path(si, step, &start, state, &mut tracker, on_increment, &mut |p: &Progress| {
+                        progress(&Progress { fraction: frac0 + p.fraction * (frac1 - frac0), ..p.clone() })
+                    })?;
+                    done_before += n_inc;
+                    continue;
+                }
+                StepKind::Buckling { modes, shift } => {
+                    let report = self.run_buckling(si, step, &start, state, *modes, *shift)?;
+                    on_increment(&report, state, self);
+                    done_before += n_inc;
+                    continue;
+                }
+            }
             let at = |tau: f64| -> Vec<f64> { start.iter().zip(&step.target_scales).map(|(a, b)| a + tau * (b - a)).collect() };
             let mut tau = 0.0;
             let mut dtau = 1.0 / n_inc as f64;
@@ -397,7 +481,11 @@ impl<'m> Solver<'m> {
                     for c in self.extras.iter_mut() {
                         c.begin_increment((next - tau) * n_inc as f64);
                     }
-                    match self.attempt(state, &trial_scales, step.linear, &mut report_progress) {
+                    let outcome = match step.kind {
+                        StepKind::StaticDamped => self.attempt_damped(state, &trial_scales, &mut report_progress),
+                        _ => self.attempt(state, &trial_scales, step.linear, &mut report_progress),
+                    };
+                    match outcome {
                         Attempt::Converged { iterations: its, residuals, indefinite: ind, energy } => {
                             iterations += its;
                             indefinite |= ind;
@@ -414,6 +502,11 @@ impl<'m> Solver<'m> {
                             }
                             if (tau - goal).abs() < 1e-12 {
                                 tau = goal;
+                                let (negative_pivots, stiffness_parameter, stability_event) = if step.linear {
+                                    (None, None, None)
+                                } else {
+                                    self.stability_at(state, &start, &step.target_scales, &mut tracker)
+                                };
                                 let report = IncrementReport {
                                     step: si,
                                     step_name: step.name.clone(),
@@ -426,12 +519,22 @@ impl<'m> Solver<'m> {
                                     indefinite_tangent: indefinite,
                                     energy,
                                     extra: std::mem::take(&mut self.extra_reports),
+                                    negative_pivots,
+                                    stiffness_parameter,
+                                    stability_event,
+                                    dynamics: None,
+                                    ..Default::default()
                                 };
                                 on_increment(&report, state, self);
                                 break;
                             }
                         }
                         Attempt::Failed { iteration, residuals, worst_element, cause } => {
+                            let cause = if cutback_level >= self.settings.max_cutbacks {
+                                super::diagnose::explain(self.model, state, &cause, indefinite || self.cholesky.kind() == FactorKind::Ldlt)
+                            } else {
+                                cause
+                            };
                             *state = saved;
                             iterations += iteration;
                             if cutback_level >= self.settings.max_cutbacks {

@@ -1,0 +1,322 @@
+//! Garment → shell parts: each ply of each panel is meshed in pattern space, placed in 3D and
+//! offset through the stack; seams become node-row ties, stitch lines node-to-node ties.
+
+use std::collections::{BTreeMap, BTreeSet};
+
+use nalgebra::Vector3;
+
+use std::ops::Range;
+
+use super::graph::{sampled_outline, span_segments, GarmentGraph};
+use super::mesh::{mapped_counts, mesh_polygon, PatternMesh};
+use super::spec::{GarmentSpec, SpanRef};
+use super::seam::rigid_link;
+use super::{seam_ties, SeamInfo};
+use crate::element::DirectorFrame;
+use crate::mesh::ShellMesh;
+use crate::model::{Load, Tie};
+use crate::scene::{Locator, SceneError};
+
+/// One ply of one panel as a shell part.
+#[derive(Clone, Debug)]
+pub struct GarmentPart {
+    /// Part name: the panel name, or `panel/ply` for multi-ply panels.
+    pub name: String,
+    /// Panel index.
+    pub panel: usize,
+    /// Ply position in the panel's stack (0 = outermost).
+    pub ply: usize,
+    /// Material name.
+    pub material: String,
+    /// Thickness.
+    pub thickness: f64,
+    /// Mass per area (0: unset).
+    pub areal_density: f64,
+    /// Placed mesh (edges: the panel's named spans).
+    pub mesh: ShellMesh,
+    /// Grain (warp) direction per quad, in 3D.
+    pub grains: Vec<Vector3<f64>>,
+}
+
+/// A meshed garment.
+#[derive(Clone, Debug)]
+pub struct GarmentMesh {
+    /// The validated panel/seam graph.
+    pub graph: GarmentGraph,
+    /// Shell parts, panel by panel, ply by ply.
+    pub parts: Vec<GarmentPart>,
+    /// Flat pattern mesh of each panel.
+    pub patterns: Vec<PatternMesh>,
+    /// Per panel, the sampled-outline segments of each outline segment (curved edges).
+    pub sample_ranges: Vec<Vec<Range<usize>>>,
+}
+
+/// Node row (pattern-mesh nodes) of a panel's named span, in span direction.
+fn span_row(pattern: &PatternMesh, ranges: &[Range<usize>], panel: &super::spec::PanelSpec, side: &SpanRef) -> Vec<usize> {
+    let Some(span) = panel.edges.get(&side.edge) else { return Vec::new() };
+    let mut row: Vec<usize> = Vec::new();
+    for seg in span_segments(panel, span.from, span.to).into_iter().flat_map(|s| ranges[s].clone()) {
+        for &n in &pattern.segment_rows[seg] {
+            if row.last() != Some(&n) {
+                row.push(n);
+            }
+        }
+    }
+    if side.reversed {
+        row.reverse();
+    }
+    row
+}
+
+/// Requested element edges per sampled outline segment of panel `pi`, so that its seam rows
+/// match a mapped-grid partner: where a seam joins a single straight segment of this panel to
+/// a single side of a partner meshed by the mapped grid, that side's count (matching when
+/// it is even, as the triangle split puts two element edges on each boundary piece).
+fn matching_counts(spec: &GarmentSpec, pi: usize, h: f64) -> Vec<Option<usize>> {
+    let sampled = |p: &super::spec::PanelSpec| sampled_outline(p, h).ok();
+    let Some((outline, ranges)) = sampled(&spec.panels[pi]) else { return Vec::new() };
+    let mut counts = vec![None; outline.len()];
+    let single = |p: &super::spec::PanelSpec, side: &SpanRef, ranges: &[Range<usize>]| -> Option<usize> {
+        let span = p.edges.get(&side.edge)?;
+        let segs = span_segments(p, span.from, span.to);
+        (segs.len() == 1 && ranges[segs[0]].len() == 1).then(|| ranges[segs[0]].start)
+    };
+    for s in &spec.seams {
+        for (mine, other) in [(&s.a, &s.b), (&s.b, &s.a)] {
+            if mine.panel != spec.panels[pi].name {
+                continue;
+            }
+            let Some(po) = spec.panels.iter().find(|p| p.name == other.panel) else { continue };
+            let Some((o_outline, o_ranges)) = sampled(po) else { continue };
+            let (Some(k), Some(ko), Some(n)) = (single(&spec.panels[pi], mine, &ranges), single(po, other, &o_ranges), mapped_counts(&o_outline, h)) else {
+                continue;
+            };
+            if let Some(c) = counts.get_mut(k) {
+                *c = Some(n[ko % 4]);
+            }
+        }
+    }
+    counts
+}
+
+/// Distance from a point to a polyline in the plane.
+fn distance_to_polyline(p: [f64; 2], line: &[[f64; 2]]) -> f64 {
+    line.windows(2)
+        .map(|w| {
+            let (a, b) = (w[0], w[1]);
+            let ab = [b[0] - a[0], b[1] - a[1]];
+            let l2 = ab[0] * ab[0] + ab[1] * ab[1];
+            let t = if l2 > 0.0 { (((p[0] - a[0]) * ab[0] + (p[1] - a[1]) * ab[1]) / l2).clamp(0.0, 1.0) } else { 0.0 };
+            ((a[0] + t * ab[0] - p[0]).powi(2) + (a[1] + t * ab[1] - p[1]).powi(2)).sqrt()
+        })
+        .fold(f64::INFINITY, f64::min)
+}
+
+impl GarmentMesh {
+    /// Validates and meshes `spec`: every panel is meshed flat at the element size, placed,
+    /// and each ply is offset along the director by its position in the stack (outermost ply
+    /// on the director side).
+    pub fn build(spec: &GarmentSpec, loc: &Locator, materials: &BTreeSet<String>) -> Result<Self, SceneError> {
+        let graph = GarmentGraph::validate(spec, loc, materials)?;
+        let h = spec.element_size;
+        let mut parts = Vec::new();
+        let mut patterns = Vec::new();
+        let mut sample_ranges = Vec::new();
+        for (pi, p) in spec.panels.iter().enumerate() {
+            let field = format!("garment.panels[{}]", p.name);
+            if let Some(msg) = p.placement.problem() {
+                return Err(loc.at(Some(&p.name), Some("placement"), format!("{field}.placement"), format!("panel \"{}\": {msg}", p.name)));
+            }
+            let g = p.grain;
+            if !(g[0].is_finite() && g[1].is_finite()) || g[0].hypot(g[1]) == 0.0 {
+                return Err(loc.at(Some(&p.name), Some("grain"), format!("{field}.grain"), "expected a non-zero grain direction"));
+            }
+            let (outline, ranges) = sampled_outline(p, h).map_err(|e| loc.at(Some(&p.name), Some("curves"), format!("{field}.curves"), format!("panel \"{}\": {e}", p.name)))?;
+            let pattern = mesh_polygon(&outline, h, &matching_counts(spec, pi, h)).map_err(|e| loc.at(Some(&p.name), Some("outline"), format!("{field}.outline"), format!("panel \"{}\": {e}", p.name)))?;
+            let fd = 1e-6 * h;
+            let mid: Vec<Vector3<f64>> = pattern.uv.iter().map(|&q| p.placement.map(q)).collect();
+            let dirs: Vec<Vector3<f64>> = pattern.uv.iter().map(|&q| p.placement.director(q, fd)).collect();
+            let grains: Vec<Vector3<f64>> = pattern
+                .quads
+                .iter()
+                .map(|q| {
+                    let c = q.iter().fold([0.0, 0.0], |s, &n| [s[0] + 0.25 * pattern.uv[n][0], s[1] + 0.25 * pattern.uv[n][1]]);
+                    let (xu, xv) = p.placement.jacobian(c, fd);
+                    (xu * g[0] + xv * g[1]).normalize()
+                })
+                .collect();
+            let thick: Vec<f64> = p.plies.iter().map(|n| spec.plies.get(n).map_or(0.0, |x| x.thickness)).collect();
+            let total: f64 = thick.iter().sum();
+            let mut edges = BTreeMap::new();
+            for name in p.edges.keys() {
+                edges.insert(name.clone(), span_row(&pattern, &ranges, p, &SpanRef { panel: p.name.clone(), edge: name.clone(), reversed: false }));
+            }
+            let mut below = 0.0;
+            for (k, ply) in p.plies.iter().enumerate() {
+                let z = 0.5 * total - below - 0.5 * thick[k];
+                below += thick[k];
+                let mesh = ShellMesh {
+                    nodes: mid.iter().zip(&dirs).map(|(x, d)| x + d * z).collect(),
+                    directors: dirs.clone(),
+                    quads: pattern.quads.clone(),
+                    edges: edges.clone(),
+                };
+                mesh.validate().map_err(|e| loc.at(Some(&p.name), Some("outline"), format!("{field}.outline"), format!("panel \"{}\": {e}", p.name)))?;
+                let name = if p.plies.len() == 1 { p.name.clone() } else { format!("{}/{ply}", p.name) };
+                let material = spec.plies.get(ply).map(|x| x.material.clone()).unwrap_or_default();
+                let areal_density = spec.plies.get(ply).map_or(0.0, |x| x.areal_density);
+                parts.push(GarmentPart { name, panel: pi, ply: k, material, thickness: thick[k], areal_density, mesh, grains: grains.clone() });
+            }
+            patterns.push(pattern);
+            sample_ranges.push(ranges);
+        }
+        Ok(Self { graph, parts, patterns, sample_ranges })
+    }
+
+    /// Global part index of (panel, ply), given the index of the first garment part.
+    fn part_of(&self, panel: usize, ply: usize) -> Option<usize> {
+        self.parts.iter().position(|p| p.panel == panel && p.ply == ply)
+    }
+
+    /// Seam and stitch-line ties. `first_node[k]` is the first global node of garment part k.
+    /// Each seam ties ply k of panel b to ply k of panel a (or a's innermost ply) with the
+    /// seam's kind and closing load, and links a's plies 1.. rigidly to its ply 0 along the
+    /// span (all plies sewn together). A stitch line links every node of plies 1.. within
+    /// half an element of the line rigidly to the node of ply 0 at the same pattern point
+    /// ([`rigid_link`]: the stack's section stays straight there).
+    #[allow(clippy::too_many_arguments)]
+    pub fn ties(
+        &self,
+        spec: &GarmentSpec,
+        loc: &Locator,
+        first_node: &[usize],
+        loads: &[Load],
+        x0: &[Vector3<f64>],
+        frames0: &mut [DirectorFrame],
+    ) -> Result<(Vec<Tie>, Vec<SeamInfo>), SceneError> {
+        let mut ties = Vec::new();
+        let mut infos = Vec::new();
+        let panel_index = |name: &str| spec.panels.iter().position(|p| p.name == name);
+        for s in &spec.seams {
+            let field = format!("garment.seams[{}]", s.name);
+            let err = |msg: String| loc.at(Some(&s.name), None, field.clone(), msg);
+            let (Some(pa), Some(pb)) = (panel_index(&s.a.panel), panel_index(&s.b.panel)) else {
+                return Err(err(format!("seam \"{}\" is dangling", s.name)));
+            };
+            let closing = match &s.closing {
+                None => None,
+                Some(l) => Some(loads.iter().position(|x| &x.name == l).ok_or_else(|| {
+                    loc.at_value(&s.name, l, format!("{field}.closing"), format!("no load pattern named \"{l}\" (declare it as `\"{l}\": Closure` in loads)"))
+                })?),
+            };
+            if closing.is_some() && (spec.panels[pa].plies.len() > 1 || spec.panels[pb].plies.len() > 1) {
+                return Err(loc.at(Some(&s.name), Some("closing"), format!("{field}.closing"), format!(
+                    "seam \"{}\": sewing (closing) a seam of multi-ply panels is not supported yet; place the panels with the spans together",
+                    s.name
+                )));
+            }
+            let row_a = span_row(&self.patterns[pa], &self.sample_ranges[pa], &spec.panels[pa], &s.a);
+            let row_b = span_row(&self.patterns[pb], &self.sample_ranges[pb], &spec.panels[pb], &s.b);
+            let global = |part: usize, row: &[usize]| -> Vec<usize> { row.iter().map(|n| n + first_node[part]).collect() };
+            let na = spec.panels[pa].plies.len();
+            let nb = spec.panels[pb].plies.len();
+            let master_part = self.part_of(pa, 0).ok_or_else(|| err("panel without plies".into()))?;
+            let master = global(master_part, &row_a);
+            for k in 1..na {
+                let part = self.part_of(pa, k).ok_or_else(|| err("missing ply".into()))?;
+                for (&m, &sl) in master.iter().zip(&global(part, &row_a)) {
+                    ties.extend(rigid_link(m, sl, x0, frames0));
+                }
+            }
+            for k in 0..nb {
+                let part_b = self.part_of(pb, k).ok_or_else(|| err("missing ply".into()))?;
+                let part_a = self.part_of(pa, k.min(na - 1)).ok_or_else(|| err("missing ply".into()))?;
+                let (t, info) = seam_ties(&s.name, s.kind, x0, frames0, &global(part_a, &row_a), &global(part_b, &row_b), closing).map_err(err)?;
+                ties.extend(t);
+                if k == 0 {
+                    infos.push(info);
+                }
+            }
+        }
+        for l in &spec.stitch_lines {
+            let Some(pi) = panel_index(&l.panel) else { continue };
+            let pattern = &self.patterns[pi];
+            let near: Vec<usize> = (0..pattern.uv.len()).filter(|&n| distance_to_polyline(pattern.uv[n], &l.points) <= 0.5 * spec.element_size).collect();
+            if near.is_empty() {
+                return Err(loc.at(Some(&l.name), Some("points"), format!("garment.stitch_lines[{}].points", l.name), format!("stitch line \"{}\" passes no mesh node of panel \"{}\"", l.name, l.panel)));
+            }
+            let Some(p0) = self.part_of(pi, 0) else { continue };
+            for k in 1..spec.panels[pi].plies.len() {
+                let Some(pk) = self.part_of(pi, k) else { continue };
+                for &n in &near {
+                    ties.extend(rigid_link(first_node[p0] + n, first_node[pk] + n, x0, frames0));
+                }
+            }
+        }
+        // A node on two seams or on a seam and a stitch line keeps its first tie per DOF
+        // (it is already joined through that tie's chain).
+        let mut seen = std::collections::HashSet::new();
+        ties.retain(|t| seen.insert(t.slave));
+        Ok((ties, infos))
+    }
+
+    /// Export layout: ids of panels, plies and materials per model part (garment parts start
+    /// at model part `first_part`), and the flat pattern laid out panel beside panel (gap of
+    /// a tenth of the largest panel) with ply k shifted by −k·(that gap) in z.
+    pub fn layout(&self, spec: &GarmentSpec, first_part: usize, first_node: &[usize], n_nodes: usize) -> super::export::GarmentLayout {
+        let plies: Vec<String> = spec.plies.keys().cloned().collect();
+        let mut materials: Vec<String> = spec.plies.values().map(|p| p.material.clone()).collect();
+        materials.sort();
+        materials.dedup();
+        let mut part_tags = vec![[-1; 3]; first_part];
+        for gp in &self.parts {
+            let ply_name = &spec.panels[gp.panel].plies[gp.ply];
+            let ply = plies.iter().position(|p| p == ply_name).map_or(-1, |i| i as i32);
+            let mat = materials.iter().position(|m| *m == gp.material).map_or(-1, |i| i as i32);
+            part_tags.push([gp.panel as i32, ply, mat]);
+        }
+        let extent = |pat: &PatternMesh| {
+            let (lo, hi) = pat.uv.iter().fold(([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]), |(lo, hi), p| ([lo[0].min(p[0]), lo[1].min(p[1])], [hi[0].max(p[0]), hi[1].max(p[1])]));
+            (lo, hi)
+        };
+        let gap = 0.1 * self.patterns.iter().map(|p| { let (lo, hi) = extent(p); (hi[0] - lo[0]).max(hi[1] - lo[1]) }).fold(0.0, f64::max);
+        let mut shift = Vec::with_capacity(self.patterns.len());
+        let mut x = 0.0;
+        for p in &self.patterns {
+            let (lo, hi) = extent(p);
+            shift.push([x - lo[0], -lo[1]]);
+            x += hi[0] - lo[0] + gap;
+        }
+        let mut flat = vec![None; n_nodes];
+        for (gp, &f) in self.parts.iter().zip(first_node) {
+            let pat = &self.patterns[gp.panel];
+            for (n, uv) in pat.uv.iter().enumerate() {
+                if let Some(slot) = flat.get_mut(f + n) {
+                    *slot = Some([uv[0] + shift[gp.panel][0], uv[1] + shift[gp.panel][1], -(gp.ply as f64) * gap]);
+                }
+            }
+        }
+        super::export::GarmentLayout { panels: spec.panels.iter().map(|p| p.name.clone()).collect(), plies, materials, part_tags, flat }
+    }
+
+    /// Warnings for connected groups of panels of which no node is supported (`supported`
+    /// tells, per garment part, whether any of its nodes has a fixed DOF).
+    pub fn unsupported(&self, spec: &GarmentSpec, loc: &Locator, supported: &[bool]) -> Vec<SceneError> {
+        let mut out = Vec::new();
+        for group in self.graph.components(spec) {
+            let any = self.parts.iter().zip(supported).any(|(p, &s)| s && group.contains(&spec.panels[p.panel].name.as_str()));
+            if !any {
+                let seamed = group.len() > 1 || spec.seams.iter().any(|s| group.contains(&s.a.panel.as_str()));
+                let first = group.first().copied().unwrap_or_default();
+                out.push(loc.at(Some(first), None, format!("garment.panels[{first}]"), format!(
+                    "warning: panel{} {} {} neither supported nor seamed to a supported panel{}",
+                    if group.len() > 1 { "s" } else { "" },
+                    group.iter().map(|g| format!("\"{g}\"")).collect::<Vec<_>>().join(", "),
+                    if group.len() > 1 { "are" } else { "is" },
+                    if seamed { "" } else { " (and not seamed at all)" }
+                )));
+            }
+        }
+        out
+    }
+}

@@ -1,0 +1,84 @@
+//! Garment export: quads tagged with panel, ply and material ids, and seams as line cells
+//! carrying their force per unit length; in 3D (a model state) or as the flat pattern.
+
+use std::path::Path;
+
+use nalgebra::Vector3;
+
+use super::SeamInfo;
+use crate::io::vtu::{write_vtu, DataArray, VtuMesh};
+use crate::model::{Model, State};
+
+/// Names and ids of the garment's panels, plies and materials, per model part and node.
+#[derive(Clone, Debug, Default)]
+pub struct GarmentLayout {
+    /// Panel names (id = index).
+    pub panels: Vec<String>,
+    /// Ply names (id = index).
+    pub plies: Vec<String>,
+    /// Material names (id = index).
+    pub materials: Vec<String>,
+    /// (panel, ply, material) ids of each model part; −1 for parts outside the garment.
+    pub part_tags: Vec<[i32; 3]>,
+    /// Flat-pattern position of each model node laid out for export (panels side by side,
+    /// plies stacked below), or None for nodes outside the garment.
+    pub flat: Vec<Option<[f64; 3]>>,
+}
+
+/// Writes the garment VTU. With `state`, points are the deformed positions and seam lines
+/// carry `seam_force_per_length` from the all-DOF internal and external forces `forces`;
+/// without, the flat pattern layout is written (seams as lines between the flat spans,
+/// forces zero). Cell data: `panel`, `ply`, `material`, `part`, `seam` (−1 where it does
+/// not apply) and the force per unit length (quads: zero).
+pub fn write_garment_vtu(
+    path: &Path,
+    model: &Model,
+    state: Option<&State>,
+    layout: Option<&GarmentLayout>,
+    seams: &[SeamInfo],
+    forces: Option<(&[f64], &[f64])>,
+    binary: bool,
+) -> std::io::Result<()> {
+    let points: Vec<[f64; 3]> = (0..model.n_nodes())
+        .map(|n| match state {
+            Some(s) => {
+                let p = model.position(s, n);
+                [p.x, p.y, p.z]
+            }
+            None => layout.and_then(|l| l.flat.get(n).copied().flatten()).unwrap_or([model.x0[n].x, model.x0[n].y, model.x0[n].z]),
+        })
+        .collect();
+    let quads: Vec<[usize; 4]> = model.elements.iter().map(|e| e.nodes).collect();
+    let mut lines = Vec::new();
+    let mut seam_id = Vec::new();
+    let mut line_force: Vec<Vector3<f64>> = Vec::new();
+    for (si, s) in seams.iter().enumerate() {
+        let f = forces.map(|(fi, fe)| s.line_forces(fi, fe)).unwrap_or_else(|| vec![Vector3::zeros(); s.slave.len()]);
+        for k in 0..s.slave.len().saturating_sub(1) {
+            lines.push([s.slave[k], s.slave[k + 1]]);
+            seam_id.push(si as i32);
+            line_force.push((f[k] + f[k + 1]) * 0.5);
+        }
+    }
+    let tag = |e: usize, k: usize| -> i32 { layout.and_then(|l| l.part_tags.get(model.elements[e].part)).map_or(-1, |t| t[k]) };
+    let n_q = quads.len();
+    let int = |k: usize| -> Vec<i32> { (0..n_q).map(|e| tag(e, k)).chain(std::iter::repeat_n(-1, lines.len())).collect() };
+    let part: Vec<i32> = model.elements.iter().map(|e| e.part as i32).chain(std::iter::repeat_n(-1, lines.len())).collect();
+    let seam: Vec<i32> = std::iter::repeat_n(-1, n_q).chain(seam_id).collect();
+    let force: Vec<f64> = std::iter::repeat_n(0.0, 3 * n_q).chain(line_force.iter().flat_map(|f| [f.x, f.y, f.z])).collect();
+    let displacement: Vec<f64> = (0..model.n_nodes())
+        .flat_map(|n| {
+            let u = state.map_or(Vector3::zeros(), |s| s.u[n]);
+            [u.x, u.y, u.z]
+        })
+        .collect();
+    let mesh = VtuMesh {
+        points: &points,
+        quads: &quads,
+        lines: &lines,
+        point_data: vec![DataArray { name: "displacement", components: 3, values: &displacement }],
+        cell_data: vec![DataArray { name: "seam_force_per_length", components: 3, values: &force }],
+        int_cell_data: vec![("panel", int(0)), ("ply", int(1)), ("material", int(2)), ("part", part), ("seam", seam)],
+    };
+    write_vtu(path, &mesh, binary)
+}

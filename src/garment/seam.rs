@@ -1,0 +1,270 @@
+//! Seams as master–slave ties between two node rows (spans).
+//!
+//! A slave node at normalised arc length s on its span is tied to the point at the same s on
+//! the master span, u_s = (1 − ξ) u_a + ξ u_b with (a, b) the master segment containing s
+//! (linear interpolation weights, so non-matching rows are tied consistently; Felippa,
+//! IFEM ch. 8–9, master–slave MFC elimination). Kinds:
+//! - plain: translations tied, director free on both sides — a hinge line;
+//! - welded (bonded): translations and the two director tilts tied, so the director is
+//!   continuous across the seam;
+//! - taped: welded, plus a stiffer strip of elements within the seam allowance (the caller
+//!   assigns those elements the tape section).
+//!
+//! Tilts live in each node's own tangent frame, so a tilt tie maps the interpolated master
+//! director variation into the slave frame: α_s,k = Σ_m w_m Σ_l (t_s,k · t_m,l) α_m,l. For
+//! coincident nodes the slave frame is made equal to the master's, and the tie is then exact
+//! for rotations of any size; across non-matching rows on a curved seam it is the
+//! linearisation about the reference frames.
+
+use nalgebra::Vector3;
+use serde::{Deserialize, Serialize};
+
+use crate::element::{DirectorFrame, NODE_DOFS};
+use crate::model::Tie;
+
+/// How a seam joins its spans.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub enum SeamKind {
+    /// Translations tied, rotations free (a hinge).
+    Plain,
+    /// Translations and director tilts tied (bonded, welded).
+    Welded,
+    /// Welded plus a stiffer strip of the seam-allowance width: elements whose centre lies
+    /// within `width` of the seam get their stiffness scaled by `stiffness_factor`.
+    Taped { width: f64, stiffness_factor: f64 },
+}
+
+impl SeamKind {
+    /// Whether the director tilts are tied.
+    pub fn ties_rotations(&self) -> bool {
+        !matches!(self, SeamKind::Plain)
+    }
+
+    /// What is wrong with the kind's parameters, if anything.
+    pub fn problem(&self) -> Option<&'static str> {
+        match *self {
+            SeamKind::Taped { width, stiffness_factor }
+                if !(width.is_finite() && width >= 0.0 && stiffness_factor.is_finite() && stiffness_factor > 0.0) =>
+            {
+                Some("a tape needs a non-negative width and a positive stiffness factor")
+            }
+            _ => None,
+        }
+    }
+}
+
+/// A built seam: its spans, slave tributary lengths and the range of its ties.
+#[derive(Clone, Debug)]
+pub struct SeamInfo {
+    /// Seam name.
+    pub name: String,
+    /// Kind.
+    pub kind: SeamKind,
+    /// Master node row (global nodes, in span order).
+    pub master: Vec<usize>,
+    /// Slave node row (global nodes, in span order).
+    pub slave: Vec<usize>,
+    /// Reference length along the slave span belonging to each slave node.
+    pub tributary: Vec<f64>,
+    /// Interpolation of each slave node on the master row: (master node, weight) pairs.
+    pub weights: Vec<Vec<(usize, f64)>>,
+}
+
+/// Cumulative normalised arc length of a polyline through `row`.
+fn arc_fractions(x: &[Vector3<f64>], row: &[usize]) -> Vec<f64> {
+    let mut s = vec![0.0; row.len()];
+    for i in 1..row.len() {
+        s[i] = s[i - 1] + (x[row[i]] - x[row[i - 1]]).norm();
+    }
+    let total = s.last().copied().unwrap_or(0.0);
+    if total > 0.0 {
+        s.iter_mut().for_each(|v| *v /= total);
+    }
+    s
+}
+
+/// Linear interpolation weights on the master row for the normalised arc length `s`;
+/// weights within `snap` of 0 or 1 are snapped so matching nodes get a single master.
+fn interpolate(master: &[usize], sm: &[f64], s: f64, snap: f64) -> Vec<(usize, f64)> {
+    let n = master.len();
+    if n == 1 {
+        return vec![(master[0], 1.0)];
+    }
+    let mut k = match sm.iter().position(|&v| v >= s) {
+        Some(0) => 0,
+        Some(p) => p - 1,
+        None => n - 2,
+    };
+    k = k.min(n - 2);
+    let len = sm[k + 1] - sm[k];
+    let xi = if len > 0.0 { ((s - sm[k]) / len).clamp(0.0, 1.0) } else { 0.0 };
+    if xi <= snap {
+        vec![(master[k], 1.0)]
+    } else if xi >= 1.0 - snap {
+        vec![(master[k + 1], 1.0)]
+    } else {
+        vec![(master[k], 1.0 - xi), (master[k + 1], xi)]
+    }
+}
+
+/// Half-segment (tributary) lengths of the nodes of a row.
+pub fn tributary_lengths(x: &[Vector3<f64>], row: &[usize]) -> Vec<f64> {
+    let mut w = vec![0.0; row.len()];
+    for i in 1..row.len() {
+        let l = (x[row[i]] - x[row[i - 1]]).norm();
+        w[i - 1] += 0.5 * l;
+        w[i] += 0.5 * l;
+    }
+    w
+}
+
+/// Ties of one seam: slave row ↔ master row by normalised arc length (both rows in the same
+/// running direction). With `closing = Some(load)`, the initial gap g₀ = x_s − Σ w x_m is
+/// closed in proportion to that load pattern's scale (offset −g₀·λ); otherwise the initial
+/// gap is kept. For welded and taped seams with coincident nodes the slave frame is set to
+/// the master's so the tilt ties are exact. Returns the ties and the seam's description.
+pub fn seam_ties(
+    name: &str,
+    kind: SeamKind,
+    x0: &[Vector3<f64>],
+    frames0: &mut [DirectorFrame],
+    master: &[usize],
+    slave: &[usize],
+    closing: Option<usize>,
+) -> Result<(Vec<Tie>, SeamInfo), String> {
+    if master.is_empty() || slave.is_empty() {
+        return Err(format!("seam \"{name}\": both spans need at least one node"));
+    }
+    if let Some(n) = slave.iter().find(|n| master.contains(n)) {
+        return Err(format!("seam \"{name}\": node {n} is on both spans"));
+    }
+    let sm = arc_fractions(x0, master);
+    let ss = arc_fractions(x0, slave);
+    let length = |row: &[usize]| row.windows(2).map(|w| (x0[w[1]] - x0[w[0]]).norm()).sum::<f64>();
+    let scale = length(master).max(length(slave)).max(1e-300);
+    let mut ties = Vec::new();
+    let mut weights = Vec::with_capacity(slave.len());
+    for (i, &s) in slave.iter().enumerate() {
+        let w = interpolate(master, &sm, ss[i], 1e-9);
+        let target: Vector3<f64> = w.iter().map(|&(m, c)| x0[m] * c).sum();
+        let gap0 = x0[s] - target;
+        for k in 0..3 {
+            let (offset, load) = match closing {
+                Some(l) => (-gap0[k], Some(l)),
+                None => (0.0, None),
+            };
+            ties.push(Tie { slave: NODE_DOFS * s + k, masters: w.iter().map(|&(m, c)| (NODE_DOFS * m + k, c)).collect(), offset, load });
+        }
+        if kind.ties_rotations() {
+            // Coincident with a single master: share its frame so the tilts are the same.
+            if w.len() == 1 && gap0.norm() <= 1e-9 * scale && frames0[s].d.dot(&frames0[w[0].0].d) > 1.0 - 1e-12 {
+                frames0[s] = DirectorFrame::new(frames0[s].d, Some(frames0[w[0].0].t1));
+            }
+            let fs = frames0[s];
+            let ts = [fs.t1, fs.t2];
+            for (k, tk) in ts.iter().enumerate() {
+                let mut masters = Vec::new();
+                for &(m, c) in &w {
+                    let tm = [frames0[m].t1, frames0[m].t2];
+                    for (l, tl) in tm.iter().enumerate() {
+                        let coef = c * tk.dot(tl);
+                        if coef.abs() > 1e-14 {
+                            masters.push((NODE_DOFS * m + 3 + l, coef));
+                        }
+                    }
+                }
+                ties.push(Tie { slave: NODE_DOFS * s + 3 + k, masters, offset: 0.0, load: None });
+            }
+        }
+        weights.push(w);
+    }
+    let info = SeamInfo {
+        name: name.to_string(),
+        kind,
+        master: master.to_vec(),
+        slave: slave.to_vec(),
+        tributary: tributary_lengths(x0, slave),
+        weights,
+    };
+    Ok((ties, info))
+}
+
+/// Ties of a rigid link from master node `m` to slave node `s` (e.g. two plies of a stack
+/// joined through the thickness at a stitch): δu_s = δu_m + δθ_m × r with r = x_s − x_m and
+/// the master's rotation δθ = t2 δα1 − t1 δα2 (so that δd = δθ × d = t1 δα1 + t2 δα2), and
+/// the slave director tilted with the master's. The weights use the reference frames: the
+/// link is exact for small rotations of the stack and first-order beyond (its length
+/// drifts by about |r| θ²/2 at a rotation θ).
+pub fn rigid_link(m: usize, s: usize, x0: &[Vector3<f64>], frames0: &mut [DirectorFrame]) -> Vec<Tie> {
+    let r = x0[s] - x0[m];
+    if frames0[s].d.dot(&frames0[m].d) > 1.0 - 1e-12 {
+        frames0[s] = DirectorFrame::new(frames0[s].d, Some(frames0[m].t1));
+    }
+    let fm = frames0[m];
+    let (a1, a2) = (fm.t2.cross(&r), -fm.t1.cross(&r));
+    let mut ties = Vec::with_capacity(5);
+    for k in 0..3 {
+        let mut masters = vec![(NODE_DOFS * m + k, 1.0)];
+        if a1[k].abs() > 1e-15 * r.norm() {
+            masters.push((NODE_DOFS * m + 3, a1[k]));
+        }
+        if a2[k].abs() > 1e-15 * r.norm() {
+            masters.push((NODE_DOFS * m + 4, a2[k]));
+        }
+        ties.push(Tie { slave: NODE_DOFS * s + k, masters, offset: 0.0, load: None });
+    }
+    let fs = frames0[s];
+    for (k, tk) in [fs.t1, fs.t2].iter().enumerate() {
+        let masters: Vec<(usize, f64)> = [fm.t1, fm.t2]
+            .iter()
+            .enumerate()
+            .map(|(l, tl)| (NODE_DOFS * m + 3 + l, tk.dot(tl)))
+            .filter(|&(_, c)| c.abs() > 1e-14)
+            .collect();
+        ties.push(Tie { slave: NODE_DOFS * s + 3 + k, masters, offset: 0.0, load: None });
+    }
+    ties
+}
+
+impl SeamInfo {
+    /// Seam force per unit length at each slave node: the tie force f_int,s − f_ext,s that
+    /// the master side exerts on the slave node (translations; all-DOF vectors before or
+    /// after folding, slave entries are kept), divided by the node's tributary length.
+    pub fn line_forces(&self, f_int: &[f64], f_ext: &[f64]) -> Vec<Vector3<f64>> {
+        self.slave
+            .iter()
+            .zip(&self.tributary)
+            .map(|(&s, &l)| {
+                let f = Vector3::from_fn(|k, _| f_int[NODE_DOFS * s + k] - f_ext[NODE_DOFS * s + k]);
+                if l > 0.0 { f / l } else { f }
+            })
+            .collect()
+    }
+
+    /// Current gap |x_s − Σ w x_m| at each slave node.
+    pub fn gaps(&self, position: impl Fn(usize) -> Vector3<f64>) -> Vec<f64> {
+        self.slave
+            .iter()
+            .zip(&self.weights)
+            .map(|(&s, w)| (position(s) - w.iter().map(|&(m, c)| position(m) * c).sum::<Vector3<f64>>()).norm())
+            .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn non_matching_rows_interpolate_linearly() {
+        // Master 0..1 with 3 nodes, slave with 5 nodes: the slave's 2nd node (s = 0.25) sits
+        // halfway between master nodes 0 and 1.
+        let x: Vec<Vector3<f64>> = (0..3).map(|i| Vector3::new(0.5 * i as f64, 0.0, 0.0)).chain((0..5).map(|i| Vector3::new(0.25 * i as f64, 0.0, 0.0))).collect();
+        let mut frames: Vec<DirectorFrame> = x.iter().map(|_| DirectorFrame::new(Vector3::z(), None)).collect();
+        let (ties, info) = seam_ties("s", SeamKind::Plain, &x, &mut frames, &[0, 1, 2], &[3, 4, 5, 6, 7], None).unwrap();
+        assert_eq!(ties.len(), 15);
+        assert_eq!(info.weights[1], vec![(0, 0.5), (1, 0.5)]);
+        assert_eq!(info.weights[2], vec![(1, 1.0)]);
+        assert!((info.tributary.iter().sum::<f64>() - 1.0).abs() < 1e-14);
+    }
+}

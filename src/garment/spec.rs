@@ -1,0 +1,182 @@
+//! The garment section of a scene file (RON): panels, plies, seams and stitch lines, all
+//! referred to by name.
+
+use std::collections::BTreeMap;
+
+use serde::{Deserialize, Serialize};
+
+use super::SeamKind;
+
+/// A garment: panels cut from plies and joined by seams.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GarmentSpec {
+    /// Target element size of the panel meshes (m).
+    pub element_size: f64,
+    /// Largest relative difference in length allowed between the two spans of a seam.
+    #[serde(default = "two_percent")]
+    pub span_tolerance: f64,
+    /// Plies by name: material and thickness.
+    pub plies: BTreeMap<String, PlySpec>,
+    /// Pattern pieces.
+    pub panels: Vec<PanelSpec>,
+    /// Seams joining panel edge spans.
+    #[serde(default)]
+    pub seams: Vec<GarmentSeamSpec>,
+    /// Quilting lines joining a panel's plies through the thickness.
+    #[serde(default)]
+    pub stitch_lines: Vec<StitchLineSpec>,
+}
+
+fn two_percent() -> f64 {
+    0.02
+}
+
+/// One ply: a fabric layer.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PlySpec {
+    /// Material name (a key of the scene's `materials`).
+    pub material: String,
+    /// Thickness (m).
+    pub thickness: f64,
+    /// Mass per area (kg/m²) for dynamic steps; 0: that of a Gravity load on the part.
+    #[serde(default)]
+    pub areal_density: f64,
+}
+
+/// A named edge span of a panel outline: from outline vertex `from` counter-clockwise to
+/// vertex `to` (0-based vertex numbers of `outline`).
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EdgeSpan {
+    /// First vertex.
+    pub from: usize,
+    /// Last vertex (counter-clockwise from `from`).
+    pub to: usize,
+}
+
+/// Initial 3D placement of a flat pattern piece (pattern coordinates (u, v)).
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum Placement {
+    /// (u, v) → origin + u e_u + v e_v with e_u, e_v from a rotation vector (degrees).
+    Rigid {
+        #[serde(default)]
+        translation: [f64; 3],
+        #[serde(default)]
+        rotation_deg: [f64; 3],
+    },
+    /// Rolled onto a cylinder: u wraps round the circumference (θ = θ₀ + u/R), v runs along
+    /// the axis; the director points outwards.
+    Cylinder {
+        origin: [f64; 3],
+        axis: [f64; 3],
+        radius: f64,
+        #[serde(default)]
+        start_angle_deg: f64,
+    },
+    /// Rolled onto a cone (isometric development): a pattern point at distance ρ from
+    /// `pattern_apex` and angle φ lies on the cone at slant distance ρ and azimuth
+    /// φ / sin(half angle); the director points outwards.
+    Cone {
+        apex: [f64; 3],
+        axis: [f64; 3],
+        half_angle_deg: f64,
+        pattern_apex: [f64; 2],
+    },
+}
+
+impl Default for Placement {
+    fn default() -> Self {
+        Placement::Rigid { translation: [0.0; 3], rotation_deg: [0.0; 3] }
+    }
+}
+
+/// A pattern piece.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PanelSpec {
+    /// Panel name.
+    pub name: String,
+    /// Closed outline in pattern coordinates (m), counter-clockwise, last vertex ≠ first.
+    pub outline: Vec<[f64; 2]>,
+    /// Named edge spans of the outline.
+    #[serde(default)]
+    pub edges: BTreeMap<String, EdgeSpan>,
+    /// Grain (warp) direction in pattern coordinates.
+    #[serde(default = "warp_along_v")]
+    pub grain: [f64; 2],
+    /// Curved edges: a named edge spanning one outline segment becomes a circular arc.
+    #[serde(default)]
+    pub curves: Vec<CurveSpec>,
+    /// Ply stack, outermost first (names of `plies`).
+    pub plies: Vec<String>,
+    /// Initial placement in 3D.
+    #[serde(default)]
+    pub placement: Placement,
+}
+
+fn warp_along_v() -> [f64; 2] {
+    [0.0, 1.0]
+}
+
+/// A curved edge: the named single-segment edge is a circular arc through its end vertices
+/// whose mid-point lies `sagitta` from the chord (positive: bulging outwards), sampled at the
+/// element size.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CurveSpec {
+    /// Edge name (one outline segment).
+    pub edge: String,
+    /// Arc height over the chord (|sagitta| < half the chord).
+    pub sagitta: f64,
+}
+
+/// One side of a seam.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SpanRef {
+    /// Panel name.
+    pub panel: String,
+    /// Edge span name on that panel.
+    pub edge: String,
+    /// Run the span from `to` back to `from` (so both sides run the same way).
+    #[serde(default)]
+    pub reversed: bool,
+}
+
+/// A seam joining two spans.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GarmentSeamSpec {
+    /// Seam name.
+    pub name: String,
+    /// Master side.
+    pub a: SpanRef,
+    /// Slave side.
+    pub b: SpanRef,
+    /// Plain, Welded or Taped.
+    pub kind: SeamKind,
+    /// Seam allowance width (m), for the record and the tape width.
+    #[serde(default)]
+    pub allowance: f64,
+    /// Stitch spacing (m), for the record.
+    #[serde(default)]
+    pub stitch_spacing: f64,
+    /// A `Closure` load pattern that sews the seam (drives the gap to zero).
+    #[serde(default)]
+    pub closing: Option<String>,
+}
+
+/// A quilting line: the plies of `panel` are tied through the thickness along it.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StitchLineSpec {
+    /// Name.
+    pub name: String,
+    /// Panel name.
+    pub panel: String,
+    /// Polyline in pattern coordinates.
+    pub points: Vec<[f64; 2]>,
+}

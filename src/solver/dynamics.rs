@@ -1,0 +1,686 @@
+//! Pseudo-transient continuation by implicit dynamics (Kelley & Keyes, SIAM J. Numer. Anal.
+//! 35, 1998; Bathe 2014 §9.2): the static problem f_int(u) = f_ext is embedded in
+//!
+//!   M ü + α_M M u̇ + f_int(u) = f_ext(t),
+//!
+//! integrated with backward Euler (first order, L-stable: it damps every mode and keeps the
+//! equilibria of the static problem), u̇_{n+1} = (u_{n+1} − u_n)/Δt, ü_{n+1} = (u̇_{n+1} −
+//! u̇_n)/Δt. Each time step is a Newton solve on the effective tangent
+//! K + (1/Δt² + α_M/Δt) M, positive definite for small enough Δt even where K is singular
+//! (a hanging cloth) or indefinite (a sheet at the wrinkling threshold). Δt grows after easy
+//! steps, so the iteration turns into Newton's method as the motion dies out, and is cut
+//! back when Newton fails or the effective tangent is not positive definite. The step stops
+//! when the kinetic energy and the static residual ‖f_int − f_ext‖ are both below their
+//! tolerances and (by default) the static tangent is positive definite there, so that an
+//! unstable equilibrium (a saddle, e.g. a flat sheet past its wrinkling threshold) is left
+//! along its unstable mode instead of being reported as rest.
+//!
+//! For transient analysis the generalized-α scheme (Chung & Hulbert 1993) is available with
+//! a chosen high-frequency dissipation ρ∞, and `duration` ends the step at a given time.
+//!
+//! Mass is lumped (row sums of the consistent mass, i.e. the nodal area weights ∫N_a dA
+//! times the part's areal density ρ_A). Director tilts carry the fibre's rotary inertia
+//! ρ_A h²/12 per area (a fibre of length h through a lamina of density ρ = ρ_A/h), scaled by
+//! `rotary_inertia`; its inertial force acts on the director, J (d − d_n − Δt ḋ_n)/Δt²,
+//! projected onto the tilt directions t1, t2.
+
+use std::time::Instant;
+
+use nalgebra::Vector3;
+use serde::{Deserialize, Serialize};
+
+use super::diagnose;
+use super::linear::FactorKind;
+use super::newton::{IncrementReport, Progress, SolveError, Solver, StepPlan};
+use crate::element::quadrature::{bilinear, gauss_legendre};
+use crate::element::NODE_DOFS;
+use crate::model::{Model, State, FIXED, UNTIED};
+
+/// Controls of a `Dynamic` step (SI units or any consistent set; times in the model's
+/// time unit).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct DynamicSettings {
+    /// First time step.
+    pub dt: f64,
+    /// Smallest time step before the step fails with a diagnosis.
+    pub dt_min: f64,
+    /// Largest time step (large values let the iteration end as Newton's method).
+    pub dt_max: f64,
+    /// Time over which the load scales ramp from the previous step's values to this step's
+    /// targets (0: applied at once).
+    pub ramp_time: f64,
+    /// Simulated time after which the step fails if the structure is not at rest.
+    pub max_time: f64,
+    /// Time steps after which the step fails if the structure is not at rest.
+    pub max_steps: usize,
+    /// Mass-proportional (Rayleigh) damping coefficient α_M (1/time): force α_M M u̇.
+    pub mass_damping: f64,
+    /// Scale on the director rotary inertia ρ_A h²/12 per area (1 = physical).
+    pub rotary_inertia: f64,
+    /// At rest when the kinetic energy ≤ kinetic_tol · max(strain energy, |f_ext·u|).
+    pub kinetic_tol: f64,
+    /// At rest when ‖f_int − f_ext‖ ≤ rest_residual_tol · max(‖f_ext‖, ‖f_int‖ incl. reactions).
+    pub rest_residual_tol: f64,
+    /// Factor on Δt after a step converged in at most 6 Newton iterations (Δt × 0.7 after
+    /// more than 9).
+    pub grow: f64,
+    /// Newton iterations per time step before it is retried with Δt/4.
+    pub max_iterations: usize,
+    /// Rest also requires a stable equilibrium: the static tangent K, shifted by 1e-10·diag|K|
+    /// against round-off, factors as LLᵀ.
+    pub require_stable: bool,
+    /// Time integration scheme.
+    pub scheme: TimeScheme,
+    /// Transient analysis: when > 0 the step ends (successfully) at this time instead of
+    /// waiting for rest.
+    pub duration: f64,
+}
+
+/// Implicit time integration schemes.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub enum TimeScheme {
+    /// Backward Euler: first order, L-stable, damps every mode (pseudo-transient to rest).
+    #[default]
+    BackwardEuler,
+    /// Generalized-α (Chung & Hulbert, J. Appl. Mech. 60, 1993), second order, with the
+    /// spectral radius ρ∞ ∈ [0, 1] at infinite frequency (1: no numerical dissipation). The
+    /// internal force is averaged, (1−α_f) f(u_{n+1}) + α_f f(u_n) (Kuhl & Crisfield 1999).
+    GeneralizedAlpha { rho_inf: f64 },
+}
+
+/// Per-step coefficients of a scheme: inertia at n+1−α_m, forces at n+1−α_f, Newmark β, γ.
+#[derive(Clone, Copy, Debug)]
+struct Coefficients {
+    /// None: backward Euler.
+    alpha: Option<(f64, f64, f64, f64)>,
+    dt: f64,
+    damping: f64,
+}
+
+impl Coefficients {
+    fn new(scheme: &TimeScheme, dt: f64, damping: f64) -> Self {
+        let alpha = match *scheme {
+            TimeScheme::BackwardEuler => None,
+            TimeScheme::GeneralizedAlpha { rho_inf } => {
+                let am = (2.0 * rho_inf - 1.0) / (rho_inf + 1.0);
+                let af = rho_inf / (rho_inf + 1.0);
+                let gamma = 0.5 - am + af;
+                let beta = 0.25 * (1.0 - am + af).powi(2);
+                Some((am, af, beta, gamma))
+            }
+        };
+        Self { alpha, dt, damping }
+    }
+
+    /// Acceleration and velocity at n+1 of a quantity with increment `dx` over the step,
+    /// previous velocity `v` and acceleration `a`.
+    fn rates(&self, dx: Vector3<f64>, v: Vector3<f64>, a: Vector3<f64>) -> (Vector3<f64>, Vector3<f64>) {
+        let dt = self.dt;
+        match self.alpha {
+            None => ((dx - v * dt) / (dt * dt), dx / dt),
+            Some((_, _, beta, gamma)) => {
+                let a1 = (dx - v * dt) / (beta * dt * dt) - a * (0.5 / beta - 1.0);
+                (a1, v + (a * (1.0 - gamma) + a1 * gamma) * dt)
+            }
+        }
+    }
+
+    /// Inertia and damping force per unit mass in the residual (scaled by 1/(1−α_f) so the
+    /// internal force at n+1 enters with weight 1).
+    fn inertia(&self, dx: Vector3<f64>, v: Vector3<f64>, a: Vector3<f64>) -> Vector3<f64> {
+        let (a1, v1) = self.rates(dx, v, a);
+        match self.alpha {
+            None => a1 + v1 * self.damping,
+            Some((am, af, _, _)) => (a1 * (1.0 - am) + a * am + (v1 * (1.0 - af) + v * af) * self.damping) / (1.0 - af),
+        }
+    }
+
+    /// Mass factor of the effective tangent K + c M.
+    fn tangent(&self) -> f64 {
+        let dt = self.dt;
+        match self.alpha {
+            None => 1.0 / (dt * dt) + self.damping / dt,
+            Some((am, af, beta, gamma)) => ((1.0 - am) / (beta * dt * dt) + self.damping * (1.0 - af) * gamma / (beta * dt)) / (1.0 - af),
+        }
+    }
+
+    /// Weight of the previous step's static residual: α_f/(1−α_f).
+    fn previous_force_weight(&self) -> f64 {
+        self.alpha.map_or(0.0, |(_, af, _, _)| af / (1.0 - af))
+    }
+}
+
+impl Default for DynamicSettings {
+    fn default() -> Self {
+        Self {
+            dt: 1e-3,
+            dt_min: 1e-10,
+            dt_max: 1e6,
+            ramp_time: 0.0,
+            max_time: 1e9,
+            max_steps: 5000,
+            mass_damping: 0.0,
+            rotary_inertia: 1.0,
+            kinetic_tol: 1e-10,
+            rest_residual_tol: 1e-6,
+            grow: 1.5,
+            max_iterations: 12,
+            require_stable: true,
+            scheme: TimeScheme::BackwardEuler,
+            duration: 0.0,
+        }
+    }
+}
+
+/// The first invalid field of `ds` and what is expected there, if any.
+pub fn check_settings(ds: &DynamicSettings) -> Option<(&'static str, &'static str)> {
+    let pos = |x: f64| x.is_finite() && x > 0.0;
+    if !pos(ds.dt) {
+        Some(("dt", "expected a positive first time step"))
+    } else if !pos(ds.dt_min) || ds.dt_min > ds.dt {
+        Some(("dt_min", "expected a positive smallest time step no larger than dt"))
+    } else if ds.dt_max.is_nan() || ds.dt_max < ds.dt {
+        Some(("dt_max", "expected a largest time step no smaller than dt"))
+    } else if !(ds.ramp_time.is_finite() && ds.ramp_time >= 0.0) {
+        Some(("ramp_time", "expected a non-negative ramp time"))
+    } else if !pos(ds.max_time) {
+        Some(("max_time", "expected a positive maximum time"))
+    } else if ds.max_steps == 0 {
+        Some(("max_steps", "expected at least one time step"))
+    } else if !(ds.mass_damping.is_finite() && ds.mass_damping >= 0.0) {
+        Some(("mass_damping", "expected a non-negative damping coefficient (1/time)"))
+    } else if !(ds.rotary_inertia.is_finite() && ds.rotary_inertia >= 0.0) {
+        Some(("rotary_inertia", "expected a non-negative scale"))
+    } else if !pos(ds.kinetic_tol) {
+        Some(("kinetic_tol", "expected a positive tolerance"))
+    } else if !pos(ds.rest_residual_tol) {
+        Some(("rest_residual_tol", "expected a positive tolerance"))
+    } else if !(ds.grow.is_finite() && ds.grow >= 1.0) {
+        Some(("grow", "expected a growth factor of at least 1"))
+    } else if ds.max_iterations == 0 {
+        Some(("max_iterations", "expected at least one iteration"))
+    } else if matches!(ds.scheme, TimeScheme::GeneralizedAlpha { rho_inf } if !(0.0..=1.0).contains(&rho_inf)) {
+        Some(("scheme", "expected a spectral radius rho_inf in [0, 1]"))
+    } else if !(ds.duration.is_finite() && ds.duration >= 0.0) {
+        Some(("duration", "expected a non-negative duration (0: run to rest)"))
+    } else {
+        None
+    }
+}
+
+/// What to add to a not-at-rest message when rest criteria were met at unstable equilibria.
+fn unstable_note(unstable_rests: usize) -> String {
+    if unstable_rests == 0 {
+        String::new()
+    } else {
+        format!(
+            "; {unstable_rests} time steps met the rest criteria at an unstable equilibrium (static tangent not positive definite: a mechanism or a saddle); `require_stable: false` accepts such a state"
+        )
+    }
+}
+
+/// Time-integration data of one accepted time step, reported with the increment.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct DynamicInfo {
+    /// Simulated time since the step began.
+    pub time: f64,
+    /// Time step just taken.
+    pub dt: f64,
+    /// Kinetic energy ½ u̇·M u̇ (translations and director rates).
+    pub kinetic_energy: f64,
+    /// Relative static residual ‖f_int − f_ext‖ / reference.
+    pub static_residual: f64,
+    /// Both rest criteria hold.
+    pub at_rest: bool,
+    /// The last report of the step (at rest, or the `duration` of a transient step reached).
+    pub end_of_step: bool,
+    /// Time steps rejected (Newton failure or indefinite effective tangent) since the
+    /// previous report.
+    pub rejected: usize,
+    /// Time steps so far in this step that met the rest criteria at an unstable
+    /// equilibrium (static tangent not positive definite) and were not accepted as rest.
+    pub unstable_rests: usize,
+}
+
+/// Lumped nodal masses of a model.
+#[derive(Clone, Debug)]
+pub struct LumpedMass {
+    /// Translational mass per node: ρ_A ∫ N_a dA summed over the node's elements.
+    pub translational: Vec<f64>,
+    /// Rotary inertia of the director per node: scale · ρ_A h²/12 ∫ N_a dA.
+    pub rotary: Vec<f64>,
+}
+
+impl LumpedMass {
+    /// Row-sum lumped mass from each part's `areal_density` (2×2 Gauss on the reference
+    /// mid-surface), with the director inertia scaled by `rotary_scale`.
+    pub fn from_model(model: &Model, rotary_scale: f64) -> Self {
+        let mut translational = vec![0.0; model.n_nodes()];
+        let mut rotary = vec![0.0; model.n_nodes()];
+        let (p2, _) = gauss_legendre(2).unwrap_or((&[0.0], &[2.0]));
+        for el in &model.elements {
+            let rho = model.parts.get(el.part).map_or(0.0, |p| p.areal_density);
+            let h = model.sections[el.section].thickness;
+            for &eta in p2 {
+                for &xi in p2 {
+                    let (n, dxi, deta) = bilinear(xi, eta);
+                    let mut gx = Vector3::zeros();
+                    let mut gy = Vector3::zeros();
+                    for a in 0..4 {
+                        gx += model.x0[el.nodes[a]] * dxi[a];
+                        gy += model.x0[el.nodes[a]] * deta[a];
+                    }
+                    let da = gx.cross(&gy).norm();
+                    for a in 0..4 {
+                        translational[el.nodes[a]] += rho * n[a] * da;
+                        rotary[el.nodes[a]] += rotary_scale * rho * h * h / 12.0 * n[a] * da;
+                    }
+                }
+            }
+        }
+        Self { translational, rotary }
+    }
+
+    /// Total translational mass.
+    pub fn total(&self) -> f64 {
+        self.translational.iter().sum()
+    }
+}
+
+/// Converged state of the previous time step: positions, directors and their rates.
+#[derive(Clone)]
+struct Kinematics {
+    state: State,
+    /// Translational velocities and accelerations.
+    v: Vec<Vector3<f64>>,
+    a: Vec<Vector3<f64>>,
+    /// Director rates and accelerations.
+    w: Vec<Vector3<f64>>,
+    wa: Vec<Vector3<f64>>,
+    /// Static residual f_int − f_ext on the free DOFs (generalized-α force average).
+    r: Vec<f64>,
+}
+
+/// Outcome of one time step's Newton solve.
+enum TimeStep {
+    Converged { iterations: usize, residuals: Vec<f64>, static_residual: f64, energy: f64, static_r: Vec<f64> },
+    /// The effective tangent was not positive definite: Δt too large for this state.
+    Indefinite { iteration: usize, residuals: Vec<f64> },
+    Failed { iteration: usize, residuals: Vec<f64>, worst_element: Option<usize>, cause: String },
+}
+
+impl<'m> Solver<'m> {
+    /// Adds the scheme's inertia and damping forces (and, for generalized-α, the weighted
+    /// static residual of the previous step) to the free residual `r`, and c·M to the
+    /// diagonal of the assembled tangent; returns ‖f_inertia‖.
+    fn add_inertia(&mut self, state: &State, prev: &Kinematics, mass: &LumpedMass, co: &Coefficients, r: &mut [f64]) -> f64 {
+        let eq = &self.model.dofs.eq;
+        let col_ptr = &self.assembler.pattern.col_ptr;
+        let c = co.tangent();
+        let wp = co.previous_force_weight();
+        if wp != 0.0 {
+            r.iter_mut().zip(&prev.r).for_each(|(x, p)| *x += wp * p);
+        }
+        let mut norm2 = 0.0;
+        for n in 0..self.model.n_nodes() {
+            let base = NODE_DOFS * n;
+            let m = mass.translational[n];
+            let a = co.inertia(state.u[n] - prev.state.u[n], prev.v[n], prev.a[n]);
+            for k in 0..3 {
+                let e = eq[base + k];
+                if e != FIXED {
+                    let f = m * a[k];
+                    r[e] += f;
+                    norm2 += f * f;
+                    self.values[col_ptr[e + 1] - 1] += m * c;
+                } else if self.model.dofs.tie_of[base + k] != UNTIED {
+                    // A tied slave's inertia acts through its masters (Tᵀ M T).
+                    let exp = self.model.dofs.expand(base + k);
+                    let f = m * a[k];
+                    exp.iter().for_each(|&(em, w)| r[em] += w * f);
+                    norm2 += f * f;
+                    self.assembler.pattern.add_weighted(&mut self.values, &exp, m * c);
+                }
+            }
+            let j = mass.rotary[n];
+            let fr = &state.frames[n];
+            let ad = co.inertia(fr.d - prev.state.frames[n].d, prev.w[n], prev.wa[n]);
+            for (k, t) in [fr.t1, fr.t2].iter().enumerate() {
+                let e = eq[base + 3 + k];
+                if e != FIXED {
+                    let f = j * t.dot(&ad);
+                    r[e] += f;
+                    norm2 += f * f;
+                    self.values[col_ptr[e + 1] - 1] += j * c;
+                } else if self.model.dofs.tie_of[base + 3 + k] != UNTIED {
+                    let exp = self.model.dofs.expand(base + 3 + k);
+                    let f = j * t.dot(&ad);
+                    exp.iter().for_each(|&(em, w)| r[em] += w * f);
+                    norm2 += f * f;
+                    self.assembler.pattern.add_weighted(&mut self.values, &exp, j * c);
+                }
+            }
+        }
+        norm2.sqrt()
+    }
+
+    /// Newton iterations for one backward-Euler step of size `dt` from `prev` at load
+    /// scales `scales`; `state` enters as the predictor and leaves as the solution.
+    #[allow(clippy::too_many_arguments)]
+    fn time_step(
+        &mut self,
+        state: &mut State,
+        prev: &Kinematics,
+        mass: &LumpedMass,
+        dt: f64,
+        ds: &DynamicSettings,
+        scales: &[f64],
+        progress: &mut dyn FnMut(usize, f64),
+    ) -> TimeStep {
+        let n = self.model.dofs.n_free;
+        let mut r = vec![0.0; n];
+        let mut du = vec![0.0; n];
+        let mut residuals = Vec::new();
+        let mut energy0: Option<f64> = None;
+        let mut static_r = vec![0.0; n];
+        let co = Coefficients::new(&ds.scheme, dt, ds.mass_damping);
+        let tol = self.settings.residual_tol;
+        self.model.apply_prescribed(state, scales);
+        let mut energy = match self.assemble(state, scales, true) {
+            Ok(e) => e,
+            Err(f) => {
+                return TimeStep::Failed { iteration: 0, residuals, worst_element: Some(f.element), cause: format!("element {} failed: {}", f.element, f.failure) };
+            }
+        };
+        for it in 0..=ds.max_iterations {
+            let (static_rel, reference) = self.residual(&mut r);
+            static_r.copy_from_slice(&r);
+            let inertia = self.add_inertia(state, prev, mass, &co, &mut r);
+            let rel = r.iter().map(|v| v * v).sum::<f64>().sqrt() / reference.max(inertia);
+            residuals.push(rel);
+            progress(it, rel);
+            if !rel.is_finite() {
+                let el = self.worst_element(&r);
+                return TimeStep::Failed { iteration: it, residuals, worst_element: el, cause: "residual is NaN or infinite".into() };
+            }
+            if it > 0 {
+                let de = du.iter().zip(&r).map(|(a, b)| a * b).sum::<f64>().abs();
+                let energy_ok = de <= self.settings.energy_tol * energy0.unwrap_or(1.0);
+                if (rel <= tol && energy_ok) || rel <= 1e-3 * tol || (energy_ok && rel <= 1e3 * tol) {
+                    return TimeStep::Converged { iterations: it, residuals, static_residual: static_rel, energy, static_r };
+                }
+            }
+            if it == ds.max_iterations {
+                break;
+            }
+            let t = Instant::now();
+            let kind = self.cholesky.factorize(&self.values);
+            self.timings.factorization += t.elapsed().as_secs_f64();
+            match kind {
+                Ok(FactorKind::Llt) => {}
+                Ok(FactorKind::Ldlt) | Err(_) => return TimeStep::Indefinite { iteration: it, residuals },
+            }
+            let t = Instant::now();
+            du.iter_mut().zip(&r).for_each(|(d, r)| *d = -r);
+            self.cholesky.solve(&mut du);
+            self.timings.solve += t.elapsed().as_secs_f64();
+            if du.iter().any(|v| !v.is_finite()) {
+                return TimeStep::Failed { iteration: it, residuals, worst_element: None, cause: "linear solve produced NaN".into() };
+            }
+            if energy0.is_none() {
+                energy0 = Some(du.iter().zip(&r).map(|(a, b)| a * b).sum::<f64>().abs().max(1e-300));
+            }
+            // Safeguarded full step: halve only when the trial state cannot be evaluated.
+            let base = state.clone();
+            let mut step = 1.0;
+            let mut accepted = false;
+            let mut last_failure = None;
+            for _ in 0..6 {
+                *state = base.clone();
+                self.model.update(state, &du, step);
+                match self.assemble(state, scales, true) {
+                    Ok(e) => {
+                        energy = e;
+                        accepted = true;
+                        break;
+                    }
+                    Err(f) => last_failure = Some(f),
+                }
+                step *= 0.5;
+            }
+            if !accepted {
+                *state = base;
+                let (el, cause) = match last_failure {
+                    Some(f) => (Some(f.element), format!("element {} failed: {}", f.element, f.failure)),
+                    None => (None, "no evaluable trial state".into()),
+                };
+                return TimeStep::Failed { iteration: it, residuals, worst_element: el, cause };
+            }
+        }
+        let el = self.worst_element(&r);
+        TimeStep::Failed {
+            iteration: ds.max_iterations,
+            residuals,
+            worst_element: el,
+            cause: format!("no convergence in {} iterations", ds.max_iterations),
+        }
+    }
+
+    /// Whether `state` is a stable equilibrium candidate: K + 1e-10·diag|K| (static tangent
+    /// at load scales `scales`) is positive definite (Lyapunov/Dirichlet: a strict minimum
+    /// of the potential energy).
+    fn stable(&mut self, state: &State, scales: &[f64]) -> bool {
+        if self.assemble(state, scales, true).is_err() {
+            return false;
+        }
+        let col_ptr = &self.assembler.pattern.col_ptr;
+        for c in 0..self.model.dofs.n_free {
+            let p = col_ptr[c + 1] - 1;
+            self.values[p] += 1e-10 * self.values[p].abs();
+        }
+        let t = Instant::now();
+        let kind = self.cholesky.factorize(&self.values);
+        self.timings.factorization += t.elapsed().as_secs_f64();
+        matches!(kind, Ok(FactorKind::Llt))
+    }
+
+    /// Relative static residual ‖f_int − f_ext‖ / max(‖f_ext‖, ‖f_int‖) of `state` at load
+    /// scales `scales` (prescribed values applied first); reactions are then available from
+    /// [`Solver::internal_force`].
+    pub fn static_residual(&mut self, state: &mut State, scales: &[f64]) -> Result<f64, String> {
+        self.model.apply_prescribed(state, scales);
+        self.assemble(state, scales, false).map_err(|f| format!("element {} failed: {}", f.element, f.failure))?;
+        let mut r = vec![0.0; self.model.dofs.n_free];
+        Ok(self.residual(&mut r).0)
+    }
+
+    /// Integrates step `si` (a `Dynamic` step) from `start` load scales to the step's targets
+    /// until rest. Every accepted time step is reported through `on_increment` (increment =
+    /// time-step number); on failure `state` holds the last accepted time step.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn run_dynamic_step(
+        &mut self,
+        si: usize,
+        step: &StepPlan,
+        ds: &DynamicSettings,
+        start: &[f64],
+        state: &mut State,
+        on_increment: &mut dyn FnMut(&IncrementReport, &State, &Self),
+        progress: &mut dyn FnMut(&Progress),
+        fraction_done: f64,
+        fraction_step: f64,
+    ) -> Result<(), SolveError> {
+        let model = self.model;
+        let mass = LumpedMass::from_model(model, ds.rotary_inertia);
+        let error = |iteration: usize, residuals: Vec<f64>, worst_element: Option<usize>, cause: String, t: f64| SolveError {
+            step: si,
+            step_name: step.name.clone(),
+            last_converged_time: si as f64 + (t / ds.max_time).min(0.999_999),
+            iteration,
+            residuals,
+            worst_element,
+            cause,
+        };
+        if let Some((key, msg)) = check_settings(ds) {
+            return Err(error(0, vec![], None, format!("invalid Dynamic setting {key}: {msg}"), 0.0));
+        }
+        let free_mass = model.dofs.eq.iter().enumerate().any(|(g, &e)| e != FIXED && g % NODE_DOFS < 3 && mass.translational[g / NODE_DOFS] > 0.0);
+        if !free_mass {
+            return Err(error(
+                0,
+                vec![],
+                None,
+                "a Dynamic step needs mass: give the parts an `areal_density` (or a Gravity load, whose density is used)".into(),
+                0.0,
+            ));
+        }
+        let at = |t: f64| -> Vec<f64> {
+            let tau = if ds.ramp_time > 0.0 { (t / ds.ramp_time).min(1.0) } else { 1.0 };
+            start.iter().zip(&step.target_scales).map(|(a, b)| a + tau * (b - a)).collect()
+        };
+        let nn = model.n_nodes();
+        let zeros = vec![Vector3::zeros(); nn];
+        let mut prev = Kinematics { state: state.clone(), v: zeros.clone(), a: zeros.clone(), w: zeros.clone(), wa: zeros, r: vec![0.0; model.dofs.n_free] };
+        if matches!(ds.scheme, TimeScheme::GeneralizedAlpha { .. }) {
+            // The force average needs the static residual r₀ of the initial state, and the
+            // initial acceleration follows from the equation of motion, M a₀ = −r₀ (loads at
+            // t = 0⁺, the state at rest).
+            let first = at(0.0);
+            if let Err(f) = self.assemble(state, &first, false) {
+                return Err(error(0, vec![], Some(f.element), format!("element {} failed: {}", f.element, f.failure), 0.0));
+            }
+            self.residual(&mut prev.r);
+            let eq = &model.dofs.eq;
+            for n in 0..nn {
+                let fr = &state.frames[n];
+                let mut torque = Vector3::zeros();
+                for k in 0..5 {
+                    let e = eq[NODE_DOFS * n + k];
+                    if e == FIXED {
+                        continue;
+                    }
+                    match k {
+                        0..=2 if mass.translational[n] > 0.0 => prev.a[n][k] = -prev.r[e] / mass.translational[n],
+                        3 => torque += fr.t1 * prev.r[e],
+                        4 => torque += fr.t2 * prev.r[e],
+                        _ => {}
+                    }
+                }
+                if mass.rotary[n] > 0.0 {
+                    prev.wa[n] = -torque / mass.rotary[n];
+                }
+            }
+        }
+        let mut t = 0.0;
+        let mut dt = ds.dt;
+        let mut rejected = 0usize;
+        let mut iterations = 0usize;
+        let mut unstable_rests = 0usize;
+        let mut indefinite = false;
+        for k in 1..=ds.max_steps {
+            let scales = at(t + dt);
+            let mut report_progress = |it: usize, res: f64| {
+                progress(&Progress { step: si, fraction: fraction_done + fraction_step * ((t + dt) / ds.max_time).min(1.0), iteration: it, residual: res })
+            };
+            // Predictor: constant velocity would overshoot at rest; start from the last state.
+            *state = prev.state.clone();
+            let outcome = self.time_step(state, &prev, &mass, dt, ds, &scales, &mut report_progress);
+            match outcome {
+                TimeStep::Converged { iterations: its, residuals, static_residual, energy, static_r } => {
+                    iterations += its;
+                    let co = Coefficients::new(&ds.scheme, dt, ds.mass_damping);
+                    let mut ke = 0.0;
+                    let (mut v, mut a, mut w, mut wa) = (prev.v.clone(), prev.a.clone(), prev.w.clone(), prev.wa.clone());
+                    for n in 0..nn {
+                        (a[n], v[n]) = co.rates(state.u[n] - prev.state.u[n], prev.v[n], prev.a[n]);
+                        (wa[n], w[n]) = co.rates(state.frames[n].d - prev.state.frames[n].d, prev.w[n], prev.wa[n]);
+                        ke += 0.5 * (mass.translational[n] * v[n].norm_squared() + mass.rotary[n] * w[n].norm_squared());
+                    }
+                    let work: f64 = (0..nn).map(|n| (0..3).map(|c| self.f_ext[NODE_DOFS * n + c] * state.u[n][c]).sum::<f64>()).sum();
+                    let e_ref = energy.abs().max(work.abs()).max(1e-300);
+                    t += dt;
+                    let still = t >= ds.ramp_time && ke <= ds.kinetic_tol * e_ref && static_residual <= ds.rest_residual_tol;
+                    // A saddle (e.g. a flat sheet past its wrinkling threshold) is no rest state:
+                    // integration goes on and the unstable mode grows from round-off.
+                    let at_rest = still && (!ds.require_stable || self.stable(state, &scales));
+                    let end_of_step = at_rest || (ds.duration > 0.0 && t >= ds.duration * (1.0 - 1e-12));
+                    if still && !at_rest {
+                        unstable_rests += 1;
+                    }
+                    let report = IncrementReport {
+                        step: si,
+                        step_name: step.name.clone(),
+                        increment: k,
+                        time: si as f64 + if end_of_step { 1.0 } else { (t / ds.max_time).min(0.999_999) },
+                        scales: scales.clone(),
+                        iterations,
+                        residuals,
+                        cutbacks: rejected,
+                        indefinite_tangent: indefinite,
+                        energy,
+                        dynamics: Some(DynamicInfo { time: t, dt, kinetic_energy: ke, static_residual, at_rest, end_of_step, rejected, unstable_rests }),
+                        ..Default::default()
+                    };
+                    on_increment(&report, state, self);
+                    if end_of_step {
+                        return Ok(());
+                    }
+                    iterations = 0;
+                    rejected = 0;
+                    indefinite = false;
+                    prev = Kinematics { state: state.clone(), v, a, w, wa, r: static_r };
+                    if its <= 6 {
+                        dt = (dt * ds.grow).min(ds.dt_max);
+                    } else if its > 9 {
+                        dt *= 0.7;
+                    }
+                    if ds.duration > 0.0 {
+                        dt = dt.min(ds.duration - t).max(1e-12 * ds.duration);
+                    }
+                    if t >= ds.max_time {
+                        return Err(error(
+                            k,
+                            vec![static_residual],
+                            None,
+                            format!(
+                                "not at rest after the maximum time {:.3e} (kinetic energy {ke:.3e} of reference {e_ref:.3e}, static residual {static_residual:.3e}); raise max_time or add mass_damping{}",
+                                ds.max_time,
+                                unstable_note(unstable_rests)
+                            ),
+                            t,
+                        ));
+                    }
+                }
+                TimeStep::Indefinite { .. } | TimeStep::Failed { .. } if dt * 0.25 >= ds.dt_min => {
+                    indefinite |= matches!(outcome, TimeStep::Indefinite { .. });
+                    *state = prev.state.clone();
+                    rejected += 1;
+                    dt *= 0.25;
+                }
+                TimeStep::Indefinite { iteration, residuals } => {
+                    let cause = format!(
+                        "time step {k} at t = {t:.4e}: effective tangent K + M/Δt² not positive definite even at Δt = {dt:.3e} ≤ 4 dt_min"
+                    );
+                    let cause = diagnose::explain(model, state, &cause, true);
+                    *state = prev.state.clone();
+                    let el = diagnose::worst_distortion(model, state).map(|w| w.0);
+                    return Err(error(iteration, residuals, el, cause, t));
+                }
+                TimeStep::Failed { iteration, residuals, worst_element, cause } => {
+                    let cause = format!("time step {k} at t = {t:.4e}, Δt = {dt:.3e} (below 4 dt_min after cut-backs): {cause}");
+                    let cause = diagnose::explain(model, state, &cause, self.cholesky.kind() == FactorKind::Ldlt);
+                    *state = prev.state.clone();
+                    return Err(error(iteration, residuals, worst_element, cause, t));
+                }
+            }
+        }
+        Err(error(
+            ds.max_steps,
+            vec![],
+            None,
+            format!("not at rest after max_steps = {} time steps (t = {t:.4e}); raise max_steps, dt_max or mass_damping{}", ds.max_steps, unstable_note(unstable_rests)),
+            t,
+        ))
+    }
+}
