@@ -30,7 +30,7 @@ fn main() -> Result<(), String> {
     };
     // Only a lateral shift of the discs: a tilt about the disc centre would start the flat
     // specimen inside the disc at the rim (0.2° lifts the rim face by 0.3 mm > h/2).
-    let (shift, phi, tilt, axis) = if seed == 0 { (0.0, 0.0, 0.0, 0.0) } else { (5e-4 * (0.5 + 0.5 * rnd()), std::f64::consts::TAU * rnd(), 0.0, 0.0) };
+    let (shift, phi, tilt, axis): (f64, f64, f64, f64) = if seed == 0 { (0.0, 0.0, 0.0, 0.0) } else { (5e-4 * (0.5 + 0.5 * rnd()), std::f64::consts::TAU * rnd(), 0.0, 0.0) };
     let z_top = -0.5 * thickness + 1e-9;
     let text = text
         .replace("preset: Some(\"cotton_broadcloth\")", &format!("preset: Some(\"{preset}\")"))
