@@ -1,6 +1,7 @@
 //! Cusick drape study: runs garments/drape/cusick.ron with a chosen fabric preset, mesh
 //! (ntheta sectors, graded rings for near-square elements), time step and a seeded
-//! perturbation (both discs shifted by 0.25–0.5 mm in a seeded direction), and prints one JSON line: sizes, steps, Newton iterations, wall
+//! perturbation (both discs shifted by 0.25–0.5 mm in a seeded direction and a seeded
+//! 0.1 mm random-field imperfection of the specimen), and prints one JSON line: sizes, steps, Newton iterations, wall
 //! time and its split, drape coefficient, folds, penetration.
 //!
 //! cargo run --release --example cusick -- PRESET NTHETA DT_MS STEPS SEED
@@ -28,8 +29,9 @@ fn main() -> Result<(), String> {
         z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
         ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
     };
-    // Only a lateral shift of the discs: a tilt about the disc centre would start the flat
-    // specimen inside the disc at the rim (0.2° lifts the rim face by 0.3 mm > h/2).
+    // A lateral shift of the discs, plus a seeded random-field imperfection of the specimen
+    // (0.1 mm < h/2 along the directors, correlation length 50 mm): with node-to-surface
+    // contact a sub-element shift of the discs alone changes no node's contact state.
     let (shift, phi, tilt, axis): (f64, f64, f64, f64) = if seed == 0 { (0.0, 0.0, 0.0, 0.0) } else { (5e-4 * (0.5 + 0.5 * rnd()), std::f64::consts::TAU * rnd(), 0.0, 0.0) };
     let z_top = -0.5 * thickness + 1e-9;
     let text = text
@@ -43,7 +45,15 @@ fn main() -> Result<(), String> {
             &format!("translation: ({:e}, {:e}, {:e}), rotation: ({:e}, {:e}, 0.0)", shift * phi.cos(), shift * phi.sin(), z_top - 0.01, tilt * axis.cos(), tilt * axis.sin()),
         )
         .replace("translation: (0.0, 0.0, 0.010149999)", &format!("translation: ({:e}, {:e}, {:e}), rotation: ({:e}, {:e}, 0.0)", shift * phi.cos(), shift * phi.sin(), -z_top + 0.01, tilt * axis.cos(), tilt * axis.sin()))
-        .replace("output: (every: 50)", "output: (vtu: false)");
+        .replace("output: (every: 50)", "output: (vtu: false)")
+        .replace(
+            "    drape: Some(",
+            &if seed == 0 {
+                "    drape: Some(".to_string()
+            } else {
+                format!("    imperfection: Some(RandomField(amplitude: 0.1e-3, correlation_length: 0.05, seed: {seed})),\n    drape: Some(")
+            },
+        );
     let sc = scene::parse(path, &text).map_err(|e| e.to_string())?;
     let built = scene::build(&sc, path, &text).map_err(|e| e.to_string())?;
     let summary = analysis::run(&sc, &built, &Default::default(), &mut |_| {}).map_err(|e| e.to_string())?;
