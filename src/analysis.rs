@@ -49,6 +49,9 @@ pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &m
     };
     let model = seeded.as_ref().map_or(&built.model, |s| &s.0);
     let mut solver = Solver::new(model, scene.solver.clone()).map_err(RunError::Setup)?;
+    if let Some(c) = &built.contact {
+        crate::contact::attach(&mut solver, model, c);
+    }
     let (dofs, tangent_nnz, factor_nnz) = solver.sizes();
     let mut summary = Summary {
         scene: scene.name.clone(),
@@ -61,7 +64,7 @@ pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &m
     if let Some(dir) = &options.out_dir {
         std::fs::create_dir_all(dir).map_err(|e| RunError::Io(format!("{}: {e}", dir.display())))?;
     }
-    let export = ExportOptions { binary: scene.output.binary };
+    let export = ExportOptions { binary: scene.output.binary, ..Default::default() };
     let mut pvd_entries: Vec<(f64, String)> = Vec::new();
     let mut garment_entries: Vec<(f64, String)> = Vec::new();
     let garment_export = !built.seams.is_empty() || built.garment.is_some();
@@ -83,6 +86,8 @@ pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &m
             if let (Some(dir), true) = (&options.out_dir, scene.output.vtu && (report.increment % every == 0 || last_of_step)) {
                 let t = Instant::now();
                 let name = format!("{}_{:04}.vtu", scene.name, pvd_entries.len() + 1);
+                let mut export = export.clone();
+                export.extra_point_data = solved.contributions().iter().flat_map(|c| c.point_data(model, st)).collect();
                 match write_state_vtu(&dir.join(&name), model, st, &export) {
                     Ok(()) => pvd_entries.push((report.time, name)),
                     Err(e) => io_error = io_error.take().or(Some(e.to_string())),
@@ -114,6 +119,9 @@ pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &m
         progress,
     );
     summary.timings = solver.timings.clone();
+    if let Some(c) = &built.contact {
+        crate::contact::summarize(scene, c, model, &state, solver.contributions(), &mut summary.extra);
+    }
     if let Some(e) = io_error {
         return Err(RunError::Io(e));
     }

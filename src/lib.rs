@@ -28,4 +28,5 @@ pub mod analysis;
 pub mod io;
 pub mod results;
 pub mod bench;
+pub mod contact;
 pub mod garment;

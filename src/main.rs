@@ -93,6 +93,9 @@ fn check(scene: &Scene, built: &BuiltScene) {
     for w in &built.warnings {
         eprintln!("{w}");
     }
+    for w in built.contact.iter().flat_map(|c| &c.warnings) {
+        eprintln!("warning: {w}");
+    }
 }
 
 fn solve(scene: &Scene, built: &BuiltScene, out: &Path, quiet: bool) -> Result<(), String> {

@@ -94,6 +94,9 @@ pub struct Summary {
     pub peak_memory_mib: Option<f64>,
     /// Files written (relative to the output directory).
     pub files: Vec<String>,
+    /// Sections of optional features (contact, stabilization, drape), by name.
+    #[serde(flatten)]
+    pub extra: std::collections::BTreeMap<String, serde_json::Value>,
     /// Limit points and bifurcations detected along the path: (increment index in
     /// `increments`, description).
     #[serde(skip_serializing_if = "Vec::is_empty")]

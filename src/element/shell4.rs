@@ -264,6 +264,8 @@ pub struct SectionRule {
     /// Element-centre point (ξ = η = 0) of each thickness level, where the in-plane shear
     /// strain of that lamina is sampled.
     centres: Vec<RulePoint>,
+    /// Thickness coordinate ζ of each level (for through-thickness material laws).
+    zetas: Vec<f64>,
 }
 
 impl SectionRule {
@@ -281,7 +283,7 @@ impl SectionRule {
             }
             centres.push(rule_point(0.0, 0.0, z, 1.0, section.thickness, section.shear));
         }
-        Ok(Self { points, centres })
+        Ok(Self { points, centres, zetas: pz.to_vec() })
     }
 }
 
@@ -560,7 +562,7 @@ impl<'a> ShellElement<'a> {
                 let nat = Self::natural_strain(&rp.terms, &kin, Some(&mut grad));
                 let mut eps = pg.m * nat;
                 eps[2] = (pg.mc * nat_c)[0];
-                let res = self.section.material.response(&eps).map_err(ElementFailure::Material)?;
+                let res = self.section.material.response_at(&eps, rule.zetas[level]).map_err(ElementFailure::Material)?;
                 energy += pg.wdet * res.energy;
                 let sn = pg.m.transpose() * (res.stress * pg.wdet);
                 sn_c += pg.mc.transpose() * (res.stress[2] * pg.wdet);
@@ -713,7 +715,7 @@ impl<'a> ShellElement<'a> {
     /// displacements `u` and current frames.
     pub fn centre_state(&self, u: &[Vector3<f64>; 4], frames: &[DirectorFrame; 4]) -> Result<(Voigt5, Voigt5), ElementFailure> {
         let rp = rule_point(0.0, 0.0, 0.0, 1.0, self.section.thickness, self.section.shear);
-        let rule = SectionRule { points: vec![rp.clone()], centres: vec![rp.clone()] };
+        let rule = SectionRule { points: vec![rp.clone()], centres: vec![rp.clone()], zetas: vec![0.0] };
         let geom = self.geometry(&rule)?;
         let kin = self.kinematics(&geom, u, frames)?;
         let nat = Self::natural_strain(&rp.terms, &kin, None);

@@ -12,6 +12,8 @@ use crate::model::{Model, State};
 pub struct ExportOptions {
     /// Base64 binary (true) or ASCII data arrays.
     pub binary: bool,
+    /// Further point data (name, components, values per node), e.g. contact pressure.
+    pub extra_point_data: Vec<(String, usize, Vec<f64>)>,
 }
 
 /// Writes `state` of `model` as a VTU: points at the deformed mid-surface; point data
@@ -51,7 +53,10 @@ pub fn write_state_vtu(path: &Path, model: &Model, state: &State, options: &Expo
             DataArray { name: "displacement", components: 3, values: &displacement },
             DataArray { name: "director", components: 3, values: &director },
             DataArray { name: "reference_position", components: 3, values: &reference },
-        ],
+        ]
+        .into_iter()
+        .chain(options.extra_point_data.iter().map(|(name, components, values)| DataArray { name, components: *components, values }))
+        .collect(),
         cell_data: vec![
             DataArray { name: "membrane_strain", components: 3, values: &strain },
             DataArray { name: "membrane_stress", components: 3, values: &stress },

@@ -6,9 +6,11 @@
 //! `[S11, S22, S12, S13, S23]`, the consistent tangent dS/dE and the stored energy density.
 //! The plane-stress condition S33 = 0 is the model's business: the element never sees E33.
 
+mod fabric;
 mod neo_hookean;
 mod svk;
 
+pub use fabric::{twist_default, Fabric, FabricProperties, FABRIC_PRESETS, SPLIT_LIMIT};
 pub use neo_hookean::NeoHookean;
 pub use svk::StVenantKirchhoff;
 
@@ -61,6 +63,24 @@ pub trait ShellMaterial: Send + Sync + std::fmt::Debug {
     fn response(&self, strain: &Voigt5) -> Result<PointResponse, MaterialFailure>;
     /// Small-strain Young's modulus and Poisson ratio (for penalty scaling and reporting).
     fn small_strain_moduli(&self) -> (f64, f64);
+    /// Response at the section's thickness coordinate ζ ∈ [−1, 1]; materials whose
+    /// stiffness varies through the thickness (the fabric's bending split) override it.
+    fn response_at(&self, strain: &Voigt5, zeta: f64) -> Result<PointResponse, MaterialFailure> {
+        let _ = zeta;
+        self.response(strain)
+    }
+    /// Thickness Gauss points the material needs (None: the section's choice).
+    fn thickness_points(&self) -> Option<usize> {
+        None
+    }
+    /// Thickness the material's sheet constants refer to, if it has one (fabric).
+    fn intrinsic_thickness(&self) -> Option<f64> {
+        None
+    }
+    /// Mass per reference area, if the material carries one (fabric).
+    fn areal_density(&self) -> Option<f64> {
+        None
+    }
 }
 
 /// Converts Young's modulus and Poisson ratio to bulk and shear moduli (K, μ).

@@ -326,6 +326,37 @@ pub fn slit_annulus(ri: f64, ro: f64, nr: usize, ntheta: usize) -> Result<ShellM
     finish("slit_annulus", "check the parameters", m)
 }
 
+/// Full flat annulus (closed in θ) with `nr x ntheta` quads, for circular specimens
+/// such as the Cusick drape test: inner radius `ri`, outer `ro`, node
+/// `(r cos θ, r sin θ, 0)`, director +z. With `graded` the radii grow
+/// geometrically, r_i = ri (ro/ri)^(i/nr), so that every ring of elements has the same
+/// radial-to-circumferential aspect ratio (near square when nr ≈ ln(ro/ri)/(2π/ntheta));
+/// otherwise they are uniform. Edges `"inner"`, `"outer"` (ordered by increasing θ).
+pub fn annulus(ri: f64, ro: f64, nr: usize, ntheta: usize, graded: bool) -> Result<ShellMesh, MeshError> {
+    positive("ri", ri)?;
+    positive("ro", ro)?;
+    if ro <= ri {
+        return Err(MeshError::Invalid(format!("ro ({ro}) must be greater than ri ({ri})")));
+    }
+    count("nr", nr, 1)?;
+    count("ntheta", ntheta, 3)?;
+    let g = Grid::new(nr, ntheta, true)?;
+    let mut m = g.build(|i, j| {
+        let f = i as f64 / nr as f64;
+        let r = if i == nr {
+            ro
+        } else if graded {
+            ri * (ro / ri).powf(f)
+        } else {
+            ri + (ro - ri) * f
+        };
+        let (s, c) = (TAU * j as f64 / ntheta as f64).sin_cos();
+        (Vector3::new(r * c, r * s, 0.0), Vector3::z())
+    })?;
+    m.edges = edges(vec![("inner", g.row_v(0)), ("outer", g.row_v(nr))]);
+    finish("annulus", "check the parameters", m)
+}
+
 /// Pre-twisted strip along x with `nx x ny` quads: x from 0 to `length`,
 /// width coordinate s in `[-width/2, width/2]`, the cross-section rotated
 /// about the x axis by φ(x) = `twist` x / `length` (radians, any sign, may be

@@ -10,7 +10,7 @@ use super::error::{Locator, SceneError};
 use super::spec::*;
 use crate::element::quadrature::{bilinear, gauss_legendre};
 use crate::element::{DirectorFrame, Section, NODE_DOFS};
-use crate::material::{bulk_shear_from_young_poisson, NeoHookean, ShellMaterial, StVenantKirchhoff};
+use crate::material::{bulk_shear_from_young_poisson, Fabric, NeoHookean, ShellMaterial, StVenantKirchhoff};
 use crate::mesh::{self, MeshQuality, ShellMesh};
 use crate::model::{DofMap, ElementDef, Load, LoadKind, Model, PartInfo};
 use crate::solver::StepPlan;
@@ -39,6 +39,8 @@ pub struct BuiltScene {
     pub node_sets: BTreeMap<String, Vec<usize>>,
     /// Mesh quality per part.
     pub quality: Vec<(String, MeshQuality)>,
+    /// Rigid bodies and contact controls.
+    pub contact: Option<crate::contact::ContactSetup>,
     /// Buckling-mode imperfection to seed before the solve.
     pub imperfection: Option<crate::solver::imperfection::Imperfection>,
     /// Seams (ties) of the model.
@@ -90,6 +92,10 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
                 }
                 Arc::new(NeoHookean::new(bulk, shear))
             }
+            MaterialSpec::Fabric(ref f) => {
+                let props = super::fabric_spec::fabric_properties(f).map_err(|(key, msg)| bad(key, &msg))?;
+                Arc::new(Fabric::new(props))
+            }
         };
         materials.insert(name.as_str(), m);
     }
@@ -130,6 +136,18 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
         if !(1..=5).contains(&p.thickness_points) {
             return Err(loc.at(Some(&p.name), Some("thickness_points"), format!("{field}.thickness_points"), "expected 1 to 5 Gauss points"));
         }
+        if let Some(t) = material.intrinsic_thickness()
+            && (p.thickness - t).abs() > 1e-9 * t
+        {
+            return Err(loc.at(
+                Some(&p.name),
+                Some("thickness"),
+                format!("{field}.thickness"),
+                format!("material \"{}\" is a sheet of thickness {t}; the part's thickness must equal it, found {}", p.material, p.thickness),
+            ));
+        }
+        // Materials with a through-thickness law (fabric) fix their own rule.
+        let thickness_points = material.thickness_points().unwrap_or(p.thickness_points);
         let mut m = make_mesh(&p.mesh, base_dir).map_err(|e| loc.at(Some(&p.name), Some("mesh"), format!("{field}.mesh"), e.to_string()))?;
         if let Some(o) = p.offset {
             m.nodes.iter_mut().for_each(|x| *x += v3(o));
@@ -137,7 +155,7 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
         quality.push((p.name.clone(), m.quality()));
         let first_node = x0.len();
         let first_element = elements.len();
-        sections.push(Section { thickness: p.thickness, shear: p.shear, thickness_points: p.thickness_points, material });
+        sections.push(Section { thickness: p.thickness, shear: p.shear, thickness_points, material });
         let grain = p.grain.map(v3);
         for q in &m.quads {
             elements.push(ElementDef { nodes: q.map(|n| n + first_node), section: pi, part: pi, grain });
@@ -354,6 +372,14 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
                 let w = v3(*g) * *areal_density;
                 LoadKind::Forces(area_weights(&x0, &elements, &parts[k]).into_iter().map(|(n, a)| (n, w * a)).collect())
             }
+            LoadSpec::SelfWeight { part, g } => {
+                let k = part_of(part)?;
+                let Some(rho) = sections[k].material.areal_density() else {
+                    return Err(loc.at(Some(name), Some("part"), format!("{field}.part"), "the part's material has no areal density (use Gravity with areal_density)"));
+                };
+                let w = v3(*g) * rho;
+                LoadKind::Forces(area_weights(&x0, &elements, &parts[k]).into_iter().map(|(n, a)| (n, w * a)).collect())
+            }
             LoadSpec::Displacement { set, dof, value } => {
                 let k = match dof {
                     Dof::Ux => 0,
@@ -422,6 +448,19 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
         monitors.push(Monitor { name: m.name.clone(), node, dofs: m.dofs.clone() });
     }
 
+    let contact = match &scene.contact {
+        Some(c) => Some(crate::contact::build_contact(c, &loc, base_dir, &parts)?),
+        None => None,
+    };
+    if let Some(d) = &scene.drape {
+        let ok = |v: f64| v.is_finite() && v > 0.0;
+        if contact.is_none() {
+            return Err(loc.at(None, Some("drape"), "drape", "drape measures need a contact section (the support disc)"));
+        }
+        if !ok(d.disc_radius) || !ok(d.specimen_radius) || d.disc_radius >= d.specimen_radius || d.resolution.is_some_and(|r| !ok(r)) {
+            return Err(loc.at(None, Some("drape"), "drape", "expected 0 < disc_radius < specimen_radius and a positive resolution"));
+        }
+    }
     let imperfection = scene.imperfection.as_ref().map(|imp| super::path::resolve_imperfection(imp, &loc, &loads)).transpose()?;
     let (mut ties, mut seams) = crate::garment::build_scene_seams(&scene.seams, &loc, &node_sets, &loads, &x0, &mut frames0)?;
     let mut warnings = Vec::new();
@@ -442,7 +481,7 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
     crate::garment::apply_tapes(&seams, &x0, &mut elements, &mut sections);
     let dofs = DofMap::with_ties(&fixed, ties).map_err(|e| loc.at(None, Some("seams"), "seams", e))?;
     let model = Model { x0, frames0, elements, sections, parts, dofs, loads };
-    Ok(BuiltScene { model, steps, monitors, node_sets, quality, imperfection, seams, warnings, garment: layout })
+    Ok(BuiltScene { model, steps, monitors, node_sets, quality, imperfection, seams, warnings, garment: layout, contact })
 }
 
 fn check_young_poisson(young: f64, poisson: f64, bad: &dyn Fn(&str, &str) -> SceneError) -> Result<(), SceneError> {
@@ -466,6 +505,7 @@ fn make_mesh(spec: &MeshSpec, base_dir: &Path) -> Result<ShellMesh, mesh::MeshEr
             mesh::hemisphere(radius, rad(hole_angle), rad(phi0), rad(phi1), n_merid, n_circ)
         }
         MeshSpec::SlitAnnulus { ri, ro, nr, ntheta } => mesh::slit_annulus(ri, ro, nr, ntheta),
+        MeshSpec::Annulus { ri, ro, nr, ntheta, graded } => mesh::annulus(ri, ro, nr, ntheta, graded),
         MeshSpec::TwistedStrip { length, width, twist, nx, ny } => mesh::twisted_strip(length, width, rad(twist), nx, ny),
         MeshSpec::Obj { ref path } => mesh::read_obj(&base_dir.join(path)),
     }

@@ -2,6 +2,7 @@
 
 mod build;
 mod error;
+mod fabric_spec;
 mod path;
 mod spec;
 

@@ -40,6 +40,12 @@ pub struct Scene {
     /// Solver controls.
     #[serde(default)]
     pub solver: SolverSettings,
+    /// Contact with rigid bodies.
+    #[serde(default)]
+    pub contact: Option<ContactSpec>,
+    /// Drape measures to report (Cusick drape coefficient, folds, penetration).
+    #[serde(default)]
+    pub drape: Option<DrapeSpec>,
     /// Geometric imperfection seeded into the reference geometry before the solve.
     #[serde(default)]
     pub imperfection: Option<ImperfectionSpec>,
@@ -94,6 +100,106 @@ pub struct SeamSpec {
     pub closing: Option<String>,
 }
 
+
+/// Rigid bodies the shell parts touch, and the contact controls.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ContactSpec {
+    /// The rigid bodies.
+    pub bodies: Vec<BodySpec>,
+    /// Parts whose nodes take part (default: all).
+    #[serde(default)]
+    pub parts: Vec<String>,
+    /// Factor c of the automatic nodal penalty k = c·A·a/ℓ² (A membrane stiffness).
+    #[serde(default = "one")]
+    pub penalty_factor: f64,
+    /// Explicit nodal normal penalty (N/m), overriding the automatic one.
+    #[serde(default)]
+    pub penalty: Option<f64>,
+    /// Tangential (stick) penalty as a fraction of the normal one.
+    #[serde(default = "one")]
+    pub tangential_factor: f64,
+    /// Viscous pseudo-time stabilization coefficient c (N/m³): force c·a·(u − u_prev).
+    #[serde(default)]
+    pub stabilization: Option<f64>,
+    /// Damped implicit pseudo-dynamics (one backward-Euler time step per increment).
+    #[serde(default)]
+    pub dynamics: Option<DrapeDynamicsSpec>,
+}
+
+/// Lumped-mass backward-Euler pseudo-dynamics of the contact module.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DrapeDynamicsSpec {
+    /// Time step per increment (s).
+    pub time_step: f64,
+    /// Mass-proportional damping (1/s).
+    #[serde(default)]
+    pub damping: f64,
+    /// Areal density (kg/m²) for parts whose material has none.
+    #[serde(default)]
+    pub areal_density: Option<f64>,
+}
+
+fn one() -> f64 {
+    1.0
+}
+
+/// A rigid body: shape in its local frame, placed by a rotation then a translation.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BodySpec {
+    /// Body name.
+    pub name: String,
+    /// Geometry (local frame).
+    pub shape: ShapeSpec,
+    /// Translation of the local origin.
+    #[serde(default)]
+    pub translation: [f64; 3],
+    /// Rotation vector (axis × angle in degrees) applied before the translation.
+    #[serde(default)]
+    pub rotation: [f64; 3],
+    /// Static Coulomb friction coefficient.
+    #[serde(default)]
+    pub friction: f64,
+    /// Kinetic coefficient (default: equal to `friction`).
+    #[serde(default)]
+    pub kinetic_friction: Option<f64>,
+    /// Edge rounding radius of a box or cylinder (its outer dimensions are kept).
+    #[serde(default)]
+    pub rounding: f64,
+}
+
+/// Rigid-body shapes. Cylinder and capsule axes are the local z axis; the plane is z = 0
+/// with its outward side +z.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum ShapeSpec {
+    Plane,
+    Sphere { radius: f64 },
+    Box { half_extents: [f64; 3] },
+    Cylinder { radius: f64, height: f64 },
+    Capsule { radius: f64, height: f64 },
+    /// Triangle mesh from OBJ or STL (ASCII or binary), path relative to the scene file.
+    TriMesh { path: String, #[serde(default = "one")] scale: f64 },
+}
+
+/// Drape measures: the Cusick drape coefficient and fold count about a vertical axis
+/// through `center`.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DrapeSpec {
+    /// Centre of the support disc (its axis is vertical, z).
+    pub center: [f64; 3],
+    /// Support disc radius.
+    pub disc_radius: f64,
+    /// Undeformed specimen radius.
+    pub specimen_radius: f64,
+    /// Raster cell size for the shadow area (default specimen_radius/1000).
+    #[serde(default)]
+    pub resolution: Option<f64>,
+}
+
 /// A material model and its constants.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -110,6 +216,39 @@ pub enum MaterialSpec {
     NeoHookean { young: f64, poisson: f64 },
     /// Ciarlet compressible neo-Hookean from bulk modulus K and shear modulus μ.
     NeoHookeanBulkShear { bulk: f64, shear: f64 },
+    /// Orthotropic fabric (warp = the part's grain), from a named preset and/or explicit
+    /// sheet constants (explicit values override the preset's).
+    Fabric(FabricSpec),
+}
+
+/// Sheet constants of a fabric (SI units); every field optional when `preset` is given.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct FabricSpec {
+    /// Preset name: light_cotton, cotton_broadcloth, polyester_faille, ripstop, knit_liner.
+    pub preset: Option<String>,
+    /// Warp tensile stiffness, N/m.
+    pub warp_tensile: Option<f64>,
+    /// Weft tensile stiffness, N/m.
+    pub weft_tensile: Option<f64>,
+    /// In-plane shear stiffness, N/m.
+    pub shear: Option<f64>,
+    /// Poisson coupling ν12.
+    pub poisson: Option<f64>,
+    /// Warp bending rigidity, N·m.
+    pub warp_bending: Option<f64>,
+    /// Weft bending rigidity, N·m.
+    pub weft_bending: Option<f64>,
+    /// Twisting rigidity, N·m (default ½√(B1·B2), capped at 0.15·shear·thickness²).
+    pub twist_bending: Option<f64>,
+    /// Transverse shear stiffness, N/m (default the larger tensile stiffness).
+    pub transverse_shear: Option<f64>,
+    /// Areal density, kg/m².
+    pub areal_density: Option<f64>,
+    /// Thickness, m (the part's thickness must equal it).
+    pub thickness: Option<f64>,
+    /// Tension stiffening (strain, factor) table, strains ascending from 0.
+    pub tension_table: Option<Vec<(f64, f64)>>,
 }
 
 fn five_sixths() -> f64 {
@@ -165,6 +304,9 @@ pub enum MeshSpec {
     SlitAnnulus { ri: f64, ro: f64, nr: usize, ntheta: usize },
     /// Strip along x, cross-section twisted linearly by `twist`. Edges x0, x1, smin, smax.
     TwistedStrip { length: f64, width: f64, twist: f64, nx: usize, ny: usize },
+    /// Full flat annulus about the z axis (closed in θ); `graded` radii grow geometrically
+    /// for near-square elements. Edges inner, outer.
+    Annulus { ri: f64, ro: f64, nr: usize, ntheta: usize, #[serde(default)] graded: bool },
     /// Quad mesh from a Wavefront OBJ file (path relative to the scene file). Edge boundary.
     Obj { path: String },
 }
@@ -246,6 +388,8 @@ pub enum LoadSpec {
     Gravity { part: String, areal_density: f64, g: [f64; 3] },
     /// Prescribed translation of the set's nodes.
     Displacement { set: String, dof: Dof, value: f64 },
+    /// Self-weight of a part from its material's areal density (fabric) and gravity vector.
+    SelfWeight { part: String, g: [f64; 3] },
     /// No force: its scale (0 → 1) closes the gaps of the seams that name it (sewing).
     Closure,
 }

@@ -44,6 +44,12 @@ pub struct Timings {
     pub solve: f64,
     /// Symbolic analysis (once).
     pub analysis: f64,
+    /// Extra contributions (contact, stabilization), including their proximity search.
+    #[serde(default)]
+    pub contact: f64,
+    /// Proximity search of the contact contributions (part of `contact`).
+    #[serde(default)]
+    pub contact_search: f64,
 }
 
 /// A converged nominal increment.
@@ -69,6 +75,9 @@ pub struct IncrementReport {
     pub indefinite_tangent: bool,
     /// Strain energy.
     pub energy: f64,
+    /// Reports of the extra contributions for this increment (e.g. contact active set).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub extra: Vec<serde_json::Value>,
     /// Load factor λ of a path-following step (scales = start + λ (target − start)).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub load_factor: Option<f64>,
@@ -169,6 +178,10 @@ pub struct Solver<'m> {
     pub(super) nodal_forces: Option<Box<dyn super::NodalForces + 'm>>,
     /// Accumulated wall-time split.
     pub timings: Timings,
+    /// Extra force/tangent terms added after element assembly.
+    extras: Vec<Box<dyn super::extra::Contribution + 'm>>,
+    /// Reports of the extras since the last nominal increment.
+    extra_reports: Vec<serde_json::Value>,
 }
 
 impl<'m> Solver<'m> {
@@ -190,7 +203,19 @@ impl<'m> Solver<'m> {
             f_ext: vec![0.0; ndof],
             nodal_forces: None,
             timings,
+            extras: Vec::new(),
+            extra_reports: Vec::new(),
         })
+    }
+
+    /// Adds a force/tangent contribution (contact, stabilization) to every assembly.
+    pub fn add_contribution(&mut self, c: Box<dyn super::extra::Contribution + 'm>) {
+        self.extras.push(c);
+    }
+
+    /// The extra contributions.
+    pub fn contributions(&self) -> &[Box<dyn super::extra::Contribution + 'm>] {
+        &self.extras
     }
 
     /// Adds configuration-dependent nodal forces (e.g. contact) to every later assembly.
@@ -234,6 +259,14 @@ impl<'m> Solver<'m> {
             if tangent { Some(&mut self.values) } else { None },
         )?;
         self.timings.assembly += info.seconds;
+        if !self.extras.is_empty() {
+            let t = Instant::now();
+            for c in self.extras.iter_mut() {
+                c.add(self.model, state, &self.assembler.pattern, &mut self.f_int, if tangent { Some(&mut self.values) } else { None });
+            }
+            self.timings.contact += t.elapsed().as_secs_f64();
+            self.timings.contact_search = self.extras.iter().map(|c| c.search_seconds()).sum();
+        }
         self.model.external_force(state, scales, &mut self.f_ext);
         if let Some(forces) = &self.nodal_forces {
             let mut jacobian = Vec::new();
@@ -445,6 +478,9 @@ impl<'m> Solver<'m> {
                     let saved = state.clone();
                     let frac = (done_before as f64 + next * n_inc as f64) / total as f64;
                     let mut report_progress = |it: usize, res: f64| progress(&Progress { step: si, fraction: frac, iteration: it, residual: res });
+                    for c in self.extras.iter_mut() {
+                        c.begin_increment((next - tau) * n_inc as f64);
+                    }
                     let outcome = match step.kind {
                         StepKind::StaticDamped => self.attempt_damped(state, &trial_scales, &mut report_progress),
                         _ => self.attempt(state, &trial_scales, step.linear, &mut report_progress),
@@ -455,6 +491,11 @@ impl<'m> Solver<'m> {
                             indefinite |= ind;
                             tau = next;
                             scales = trial_scales;
+                            for c in self.extras.iter_mut() {
+                                if let Some(r) = c.commit(self.model, state) {
+                                    self.extra_reports.push(r);
+                                }
+                            }
                             if its <= 6 && cutback_level > 0 {
                                 cutback_level -= 1;
                                 dtau *= 2.0;
@@ -477,6 +518,7 @@ impl<'m> Solver<'m> {
                                     cutbacks,
                                     indefinite_tangent: indefinite,
                                     energy,
+                                    extra: std::mem::take(&mut self.extra_reports),
                                     negative_pivots,
                                     stiffness_parameter,
                                     stability_event,

@@ -1,0 +1,430 @@
+//! Node-to-rigid-body contact: penalty normal contact and penalty-regularised Coulomb
+//! friction, evaluated per shell node against every body (Wriggers, *Computational
+//! Contact Mechanics*, 2nd ed. 2006, §5.2 and §10.3; Laursen 2002, ch. 5).
+//!
+//! Gap of node a with body b: g = d_b(x_a) − h_a/2, with d_b the body's signed distance
+//! (parry3d closest-point query, bounded by the half-thickness) and h_a the largest
+//! thickness of the sections around the node (the shell's face, not its mid-surface,
+//! touches the body). Normal: λ = k_n⟨−g⟩, internal force k_n g n, tangent
+//! k_n (n nᵀ + g ∇n) with ∇n the Hessian of the signed distance (analytic for the sphere
+//! and the plane, central differences of the projected normal otherwise).
+//! Friction: regularised Coulomb law measured from an anchor point x̂ (where the node
+//! stuck): s = (I − nnᵀ)(x − x̂), t = −μλ tanh(k_t|s|/(μλ)) ŝ — the elastic-slip penalty
+//! k_t for small s, saturating smoothly at the Coulomb limit μλ (a hard stick/slip switch
+//! made Newton cycle between the two branches on drapes). μ is the static coefficient unless
+//! the pair slid in the previous increment (then kinetic). Tangent (consistent for fixed λ
+//! and n): [k_t sech²(·) ŝŝᵀ + μλ tanh(·)/|s| (I − ŝŝᵀ)](I − nnᵀ), symmetrised. The
+//! unsymmetric coupling −μ tanh(·) k_n ŝ nᵀ (friction change from a normal motion) is left
+//! out rather than symmetrised: symmetrising puts ½μk_n ŝ into the normal row, so a long
+//! slide step produces a spurious normal force of order μk_n·slide that lifts the node off
+//! (measured: Newton then cycles between contact and separation). Without it the iteration
+//! is quasi-Newton while nodes slide (linear convergence, exact residual). A pair counts as
+//! sliding when k_t|s| > 2μλ; on convergence its anchor is dragged to trail the node by
+//! 2μ_kλ/k_t (return mapping), so friction is path-dependent across increments.
+//! Penalty: k_n = c·A·a/ℓ² per node, with A the membrane stiffness (N/m) of the stiffest
+//! section at the node (E·h, or the fabric's larger tensile stiffness), a the node's
+//! tributary area and ℓ² the mean area of its elements (so a uniform pressure p penetrates
+//! uniformly by p ℓ²/(c A)); c = 1 unless the scene overrides it, or k_n is given directly.
+
+use std::time::Instant;
+
+use nalgebra::{Matrix3, Vector3};
+use rayon::prelude::*;
+use serde::Serialize;
+
+use super::body::{RigidBody, Shape};
+use crate::assembly::Pattern;
+use crate::element::NODE_DOFS;
+use crate::model::{Model, State, FIXED};
+use crate::solver::extra::{slot, Contribution};
+
+/// A pair counts as sliding (and its anchor is dragged along on commit) when k_t|s| > 2μλ,
+/// i.e. the regularised friction force exceeds tanh 2 = 96 % of μλ.
+const SLIDE_ARG: f64 = 2.0;
+
+/// Contact controls.
+#[derive(Clone, Debug)]
+pub struct ContactSettings {
+    /// Penalty factor c in k_n = c·A·a/ℓ².
+    pub penalty_factor: f64,
+    /// Explicit nodal normal penalty (N/m), overriding the automatic choice.
+    pub penalty: Option<f64>,
+    /// Tangential penalty as a fraction of the normal one.
+    pub tangential_factor: f64,
+}
+
+impl Default for ContactSettings {
+    fn default() -> Self {
+        Self { penalty_factor: 1.0, penalty: None, tangential_factor: 1.0 }
+    }
+}
+
+/// Committed state of one node–body pair.
+#[derive(Clone, Copy, Debug, Default)]
+struct PairHistory {
+    anchor: Option<Vector3<f64>>,
+    sliding: bool,
+    active: bool,
+    slip: f64,
+}
+
+/// Evaluation of one node–body pair.
+#[derive(Clone, Copy, Debug, Default)]
+struct PairEval {
+    gap: f64,
+    lambda: f64,
+    tangential: Vector3<f64>,
+    sliding: bool,
+    active: bool,
+}
+
+/// Active-set changes and contact resultants of one converged increment.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct ContactIncrement {
+    /// Node–body pairs in contact.
+    pub active: usize,
+    /// Pairs that came into contact.
+    pub activated: usize,
+    /// Pairs that separated.
+    pub released: usize,
+    /// Active pairs sliding.
+    pub sliding: usize,
+    /// Pairs that changed between stick and slip.
+    pub stick_slip_changes: usize,
+    /// Largest penetration of the shell face into a body (−gap), m.
+    pub max_penetration: f64,
+    /// Sum of the normal contact forces (N).
+    pub normal_force: f64,
+    /// Resultant contact force on the shell (N), normal plus friction.
+    pub resultant: [f64; 3],
+}
+
+/// Node-to-rigid-body contact of a model's shell nodes.
+pub struct ContactSet {
+    /// The rigid bodies.
+    pub bodies: Vec<RigidBody>,
+    /// Participating global nodes.
+    pub nodes: Vec<usize>,
+    /// Contact offset h/2 per participating node.
+    pub offset: Vec<f64>,
+    /// Tributary reference area per participating node.
+    pub area: Vec<f64>,
+    /// Normal penalty per participating node (N/m).
+    pub k_normal: Vec<f64>,
+    tangential_factor: f64,
+    history: Vec<PairHistory>,
+    committed_x: Vec<Vector3<f64>>,
+    last: Vec<PairEval>,
+    slots: Option<Vec<[Option<usize>; 9]>>,
+    search_s: f64,
+    /// Reject trial states with a mid-surface through a body (see `add`).
+    pub reject_through: bool,
+    /// Per-increment reports (also returned by `commit`).
+    pub increments: Vec<ContactIncrement>,
+}
+
+impl ContactSet {
+    /// Contact of the nodes of `parts` (all parts when empty) of `model` with `bodies`.
+    pub fn new(model: &Model, bodies: Vec<RigidBody>, parts: &[usize], settings: &ContactSettings) -> Self {
+        let n = model.n_nodes();
+        let mut in_set = vec![parts.is_empty(); n];
+        for &p in parts {
+            let info = &model.parts[p];
+            in_set[info.first_node..info.first_node + info.n_nodes].iter_mut().for_each(|b| *b = true);
+        }
+        let mut half = vec![0.0f64; n];
+        let mut stiff = vec![0.0f64; n];
+        let mut area = vec![0.0f64; n];
+        let mut el_area_sum = vec![0.0f64; n];
+        let mut el_count = vec![0usize; n];
+        for (e, def) in model.elements.iter().enumerate() {
+            let sec = &model.sections[def.section];
+            let (young, _) = sec.material.small_strain_moduli();
+            let a_el = model.element(e).reference_area();
+            for &a in &def.nodes {
+                half[a] = half[a].max(0.5 * sec.thickness);
+                stiff[a] = stiff[a].max(young * sec.thickness);
+                area[a] += 0.25 * a_el;
+                el_area_sum[a] += a_el;
+                el_count[a] += 1;
+            }
+        }
+        let nodes: Vec<usize> = (0..n).filter(|&a| in_set[a] && el_count[a] > 0).collect();
+        let k_normal = nodes
+            .iter()
+            .map(|&a| settings.penalty.unwrap_or_else(|| settings.penalty_factor * stiff[a] * area[a] / (el_area_sum[a] / el_count[a] as f64)))
+            .collect();
+        let nb = bodies.len();
+        let np = nodes.len() * nb;
+        Self {
+            offset: nodes.iter().map(|&a| half[a]).collect(),
+            area: nodes.iter().map(|&a| area[a]).collect(),
+            committed_x: nodes.iter().map(|&a| model.x0[a]).collect(),
+            k_normal,
+            nodes,
+            bodies,
+            tangential_factor: settings.tangential_factor,
+            history: vec![PairHistory::default(); np],
+            last: vec![PairEval::default(); np],
+            slots: None,
+            search_s: 0.0,
+            reject_through: true,
+            increments: Vec::new(),
+        }
+    }
+
+    /// Evaluates every pair at `state`: per participating node the force (to add to f_int),
+    /// the 3×3 tangent, and per pair the evaluation.
+    fn evaluate(&self, model: &Model, state: &State, with_tangent: bool) -> Vec<(Vector3<f64>, Matrix3<f64>, Vec<PairEval>)> {
+        let nb = self.bodies.len();
+        (0..self.nodes.len())
+            .into_par_iter()
+            .map(|i| {
+                let a = self.nodes[i];
+                let x = model.x0[a] + state.u[a];
+                let r = self.offset[i];
+                let k = self.k_normal[i];
+                let kt = self.tangential_factor * k;
+                let mut f = Vector3::zeros();
+                let mut kk = Matrix3::zeros();
+                let mut evals = vec![PairEval::default(); nb];
+                for (b, body) in self.bodies.iter().enumerate() {
+                    // Search reach: the offset plus twice the node's spacing, so that a node a
+                    // Newton step carried deeper than the offset is still seen (a bounded
+                    // trimesh query returns nothing for points farther inside than the bound).
+                    let reach = r + 2.0 * self.area[i].sqrt();
+                    let Some(prox) = body.proximity(&x, reach) else { continue };
+                    let g = prox.distance - r;
+                    if g >= 0.0 {
+                        evals[b].gap = g;
+                        continue;
+                    }
+                    let n = prox.normal;
+                    let lambda = -k * g;
+                    f += n * (k * g);
+                    if with_tangent {
+                        kk += n * n.transpose() * k + distance_hessian(body, &x, &n, prox.distance) * (k * g);
+                    }
+                    let hist = self.history[i * nb + b];
+                    let mut ev = PairEval { gap: g, lambda, active: true, ..Default::default() };
+                    // Saturation level: static unless the pair slid in the last increment.
+                    let mu = if hist.sliding { body.mu_kinetic } else { body.mu_static };
+                    if mu > 0.0 {
+                        let anchor = hist.anchor.unwrap_or(self.committed_x[i]);
+                        let p = Matrix3::identity() - n * n.transpose();
+                        let s = p * (x - anchor);
+                        let sn = s.norm();
+                        let cap = mu * lambda;
+                        let arg = kt * sn / cap;
+                        if sn > 0.0 {
+                            let sh = s / sn;
+                            // Smooth Coulomb law t = −μλ tanh(k_t|s|/(μλ)) ŝ.
+                            let th = arg.tanh();
+                            f += sh * (cap * th);
+                            ev.tangential = -sh * (cap * th);
+                            ev.sliding = arg > SLIDE_ARG;
+                            if with_tangent {
+                                let along = kt * (1.0 - th * th);
+                                let across = cap * th / sn;
+                                kk += (sh * sh.transpose() * along + (Matrix3::identity() - sh * sh.transpose()) * across) * p;
+                            }
+                        } else if with_tangent {
+                            kk += p * kt;
+                        }
+                    }
+                    evals[b] = ev;
+                }
+                if with_tangent {
+                    kk = (kk + kk.transpose()) * 0.5;
+                }
+                (f, kk, evals)
+            })
+            .collect()
+    }
+
+    /// Upper-triangle slots of each participating node's 3×3 translation block.
+    fn node_slots(model: &Model, pattern: &Pattern, nodes: &[usize]) -> Vec<[Option<usize>; 9]> {
+        let eq = &model.dofs.eq;
+        nodes
+            .iter()
+            .map(|&a| {
+                let mut s = [None; 9];
+                for i in 0..3 {
+                    for j in i..3 {
+                        let (r, c) = (eq[NODE_DOFS * a + i], eq[NODE_DOFS * a + j]);
+                        if r != FIXED && c != FIXED {
+                            s[3 * i + j] = slot(pattern, r, c);
+                        }
+                    }
+                }
+                s
+            })
+            .collect()
+    }
+
+    /// Largest penetration (−gap) of the last evaluation, m.
+    pub fn max_penetration(&self) -> f64 {
+        self.last.iter().filter(|e| e.active).map(|e| -e.gap).fold(0.0, f64::max)
+    }
+
+    /// Resultant contact force on the shell (N) at the last evaluation, summed over nodes.
+    pub fn resultant(&self, model: &Model, state: &State) -> Vector3<f64> {
+        self.evaluate(model, state, false).iter().map(|(f, _, _)| -f).sum()
+    }
+}
+
+/// Hessian ∇n of the signed distance of `body` at `x` (outward normal `n`, distance `d`):
+/// zero for the plane, (I − nnᵀ)/(R + d) for the sphere, central differences of the
+/// projected normal (step 1e-6 of the distance scale) otherwise.
+fn distance_hessian(body: &RigidBody, x: &Vector3<f64>, n: &Vector3<f64>, d: f64) -> Matrix3<f64> {
+    match &body.shape {
+        Shape::Plane => Matrix3::zeros(),
+        Shape::Sphere(b) => (Matrix3::identity() - n * n.transpose()) / (b.radius + body.rounding + d).max(1e-12),
+        _ => {
+            let h = 1e-6 * x.norm().max(d.abs()).max(1e-3);
+            let mut m = Matrix3::zeros();
+            for j in 0..3 {
+                let mut e = Vector3::zeros();
+                e[j] = h;
+                let probe = |y: Vector3<f64>| body.proximity(&y, f64::MAX).map(|p| p.normal).unwrap_or(*n);
+                let col = (probe(x + e) - probe(x - e)) / (2.0 * h);
+                m.set_column(j, &col);
+            }
+            (m + m.transpose()) * 0.5
+        }
+    }
+}
+
+impl Contribution for ContactSet {
+    fn add(&mut self, model: &Model, state: &State, pattern: &Pattern, f_int: &mut [f64], values: Option<&mut [f64]>) {
+        let t = Instant::now();
+        let out = self.evaluate(model, state, values.is_some());
+        self.search_s += t.elapsed().as_secs_f64();
+        if self.slots.is_none() {
+            self.slots = Some(Self::node_slots(model, pattern, &self.nodes));
+        }
+        let nb = self.bodies.len();
+        for (i, (f, _, ev)) in out.iter().enumerate() {
+            let a = self.nodes[i];
+            // A Newton step that carries a free node from above a body to below its surface
+            // (mid-surface through the body) would be answered by a huge penalty force and
+            // the iteration would chatter between contact and separation: reject the trial
+            // state so the step is shortened instead.
+            let through = self.reject_through && ev.iter().any(|e| e.active && -e.gap > self.offset[i]);
+            for k in 0..3 {
+                f_int[NODE_DOFS * a + k] += if through { f64::NAN } else { f[k] };
+            }
+            self.last[i * nb..(i + 1) * nb].copy_from_slice(ev);
+        }
+        if let (Some(v), Some(slots)) = (values, self.slots.as_ref()) {
+            for (i, (_, kk, _)) in out.iter().enumerate() {
+                for r in 0..3 {
+                    for c in r..3 {
+                        if let Some(s) = slots[i][3 * r + c] {
+                            v[s] += kk[(r, c)];
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    fn commit(&mut self, model: &Model, state: &State) -> Option<serde_json::Value> {
+        let t = Instant::now();
+        let out = self.evaluate(model, state, false);
+        self.search_s += t.elapsed().as_secs_f64();
+        let nb = self.bodies.len();
+        let mut rep = ContactIncrement::default();
+        let mut resultant = Vector3::zeros();
+        for (i, (f, _, evals)) in out.iter().enumerate() {
+            let a = self.nodes[i];
+            let x = model.x0[a] + state.u[a];
+            resultant -= f;
+            for (b, ev) in evals.iter().enumerate() {
+                let h = &mut self.history[i * nb + b];
+                if ev.active {
+                    rep.active += 1;
+                    rep.activated += usize::from(!h.active);
+                    rep.max_penetration = rep.max_penetration.max(-ev.gap);
+                    rep.normal_force += ev.lambda;
+                    let anchor = h.anchor.unwrap_or(self.committed_x[i]);
+                    if ev.sliding {
+                        rep.sliding += 1;
+                        // Return mapping: the anchor trails the node by the slip at which the
+                        // regularised force reaches tanh 2 of μλ.
+                        let kt = self.tangential_factor * self.k_normal[i];
+                        let t = ev.tangential.norm();
+                        let lag = SLIDE_ARG * self.bodies[b].mu_kinetic * ev.lambda / kt;
+                        let new_anchor = if t > 0.0 { x + ev.tangential * (lag / t) } else { x };
+                        h.slip += (new_anchor - anchor).norm();
+                        h.anchor = Some(new_anchor);
+                    } else {
+                        h.anchor = Some(anchor);
+                    }
+                    rep.stick_slip_changes += usize::from(h.active && h.sliding != ev.sliding);
+                    h.sliding = ev.sliding;
+                    h.active = true;
+                } else {
+                    rep.released += usize::from(h.active);
+                    h.active = false;
+                    h.sliding = false;
+                    h.anchor = None;
+                }
+                self.last[i * nb + b] = *ev;
+            }
+            self.committed_x[i] = x;
+        }
+        rep.resultant = [resultant.x, resultant.y, resultant.z];
+        self.increments.push(rep.clone());
+        serde_json::to_value(serde_json::json!({ "contact": rep })).ok()
+    }
+
+    fn search_seconds(&self) -> f64 {
+        self.search_s
+    }
+
+    /// `contact_pressure` (Pa, normal force over tributary area, summed over bodies),
+    /// `contact_slip` (accumulated slip, m), `contact_status` (0 free, 1 stick, 2 slip) and
+    /// `contact_gap` (smallest gap of the shell face to any body within reach, m; 0 when
+    /// none is within the half-thickness).
+    fn point_data(&self, model: &Model, _state: &State) -> Vec<(String, usize, Vec<f64>)> {
+        let n = model.n_nodes();
+        let nb = self.bodies.len();
+        let (mut p, mut slip, mut status, mut gap) = (vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+        for (i, &a) in self.nodes.iter().enumerate() {
+            for b in 0..nb {
+                let (ev, h) = (&self.last[i * nb + b], &self.history[i * nb + b]);
+                slip[a] += h.slip;
+                if ev.active {
+                    p[a] += ev.lambda / self.area[i];
+                    status[a] = f64::max(status[a], if ev.sliding { 2.0 } else { 1.0 });
+                    gap[a] = f64::min(gap[a], ev.gap);
+                }
+            }
+        }
+        vec![
+            ("contact_pressure".into(), 1, p),
+            ("contact_slip".into(), 1, slip),
+            ("contact_status".into(), 1, status),
+            ("contact_gap".into(), 1, gap),
+        ]
+    }
+
+    fn summary(&self) -> Option<(String, serde_json::Value)> {
+        let last = self.increments.last().cloned().unwrap_or_default();
+        let max_pen = self.increments.iter().map(|r| r.max_penetration).fold(0.0, f64::max);
+        let k_min = self.k_normal.iter().copied().fold(f64::INFINITY, f64::min);
+        let k_max = self.k_normal.iter().copied().fold(0.0, f64::max);
+        Some((
+            "contact".into(),
+            serde_json::json!({
+                "bodies": self.bodies.iter().map(|b| format!("{}: {:?}", b.name, b.shape)).collect::<Vec<_>>(),
+                "nodes": self.nodes.len(),
+                "penalty_range": [k_min, k_max],
+                "max_penetration": max_pen,
+                "final": last,
+                "search_s": self.search_s,
+            }),
+        ))
+    }
+}

@@ -1,0 +1,212 @@
+//! Contact of shell nodes with rigid bodies (parry3d), viscous drape stabilization and drape
+//! measures.
+
+pub mod body;
+pub mod drape;
+pub mod mechanics;
+pub mod stabilize;
+pub mod trimesh_io;
+
+use std::path::Path;
+
+use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
+use parry3d_f64::math::Vector as PVec;
+use parry3d_f64::shape::{Ball, Capsule, Cuboid, Cylinder};
+
+pub use body::{Proximity, RigidBody, Shape};
+pub use mechanics::{ContactIncrement, ContactSet, ContactSettings};
+pub use stabilize::{Inertia, Stabilization};
+
+use crate::model::PartInfo;
+use crate::scene::{ContactSpec, Locator, SceneError, ShapeSpec};
+
+/// Rigid bodies, the participating parts and the contact controls of a scene.
+#[derive(Clone, Debug)]
+pub struct ContactSetup {
+    /// Placed bodies.
+    pub bodies: Vec<RigidBody>,
+    /// Participating part indices (empty: all).
+    pub parts: Vec<usize>,
+    /// Penalty controls.
+    pub settings: ContactSettings,
+    /// Viscous stabilization coefficient (N/m³), if any.
+    pub stabilization: Option<f64>,
+    /// Pseudo-dynamics: (time step s, damping 1/s, fallback areal density kg/m²).
+    pub dynamics: Option<(f64, f64, f64)>,
+    /// Warnings from mesh repair (file: what was repaired).
+    pub warnings: Vec<String>,
+}
+
+/// Builds the bodies of `spec`; mesh paths are relative to `base_dir`. Errors are located
+/// at the body's name in the scene text.
+pub fn build_contact(spec: &ContactSpec, loc: &Locator, base_dir: &Path, parts: &[PartInfo]) -> Result<ContactSetup, SceneError> {
+    let pos = |x: f64| x.is_finite() && x > 0.0;
+    let mut bodies = Vec::new();
+    let mut warnings = Vec::new();
+    for (bi, b) in spec.bodies.iter().enumerate() {
+        let field = format!("contact.bodies[{}]", b.name);
+        let bad = |key: &str, msg: String| loc.at(Some(&b.name), Some(key), format!("{field}.{key}"), msg);
+        let rounding = b.rounding;
+        if !(rounding.is_finite() && rounding >= 0.0) {
+            return Err(bad("rounding", format!("expected a non-negative rounding radius, found {rounding}")));
+        }
+        if rounding > 0.0 && !matches!(b.shape, ShapeSpec::Box { .. } | ShapeSpec::Cylinder { .. }) {
+            return Err(bad("rounding", "rounding applies to Box and Cylinder bodies only".into()));
+        }
+        let shape = match &b.shape {
+            ShapeSpec::Plane => Shape::Plane,
+            ShapeSpec::Sphere { radius } => {
+                if !pos(*radius) {
+                    return Err(bad("radius", format!("expected a positive radius, found {radius}")));
+                }
+                Shape::Sphere(Ball::new(*radius))
+            }
+            ShapeSpec::Box { half_extents } => {
+                if !half_extents.iter().all(|&h| h.is_finite() && h > rounding) {
+                    return Err(bad("half_extents", format!("expected half extents larger than the rounding {rounding}, found {half_extents:?}")));
+                }
+                let r = rounding;
+                Shape::Box(Cuboid::new(PVec::new(half_extents[0] - r, half_extents[1] - r, half_extents[2] - r)))
+            }
+            ShapeSpec::Cylinder { radius, height } => {
+                if !(radius.is_finite() && height.is_finite() && *radius > rounding && 0.5 * height > rounding) {
+                    return Err(bad("radius", format!("expected a radius and half height larger than the rounding {rounding}, found {radius}, {height}")));
+                }
+                Shape::Cylinder(Cylinder::new(0.5 * height - rounding, radius - rounding))
+            }
+            ShapeSpec::Capsule { radius, height } => {
+                if !pos(*radius) || !pos(*height) {
+                    return Err(bad("radius", format!("expected a positive radius and height, found {radius}, {height}")));
+                }
+                Shape::Capsule(Capsule::new_y(0.5 * height, *radius))
+            }
+            ShapeSpec::TriMesh { path, scale } => {
+                if !pos(*scale) {
+                    return Err(bad("scale", format!("expected a positive scale, found {scale}")));
+                }
+                let full = base_dir.join(path);
+                let (mut soup, w) = trimesh_io::read_trimesh(&full).map_err(|e| bad("path", format!("triangle mesh rejected: {e}")))?;
+                soup.vertices.iter_mut().for_each(|v| *v *= *scale);
+                warnings.extend(w.into_iter().map(|m| format!("{}: {m}", full.display())));
+                Shape::mesh(&soup).map_err(|e| bad("path", format!("{}: {e}", full.display())))?
+            }
+        };
+        if !(b.friction.is_finite() && b.friction >= 0.0) {
+            return Err(bad("friction", format!("expected a non-negative friction coefficient, found {}", b.friction)));
+        }
+        let kinetic = b.kinetic_friction.unwrap_or(b.friction);
+        if !(kinetic.is_finite() && kinetic >= 0.0 && kinetic <= b.friction) {
+            return Err(bad("kinetic_friction", format!("expected 0 ≤ kinetic ≤ static friction, found {kinetic} (static {})", b.friction)));
+        }
+        if !b.translation.iter().chain(&b.rotation).all(|v| v.is_finite()) {
+            return Err(bad("translation", "expected finite translation and rotation".into()));
+        }
+        let rv = Vector3::from(b.rotation).map(f64::to_radians);
+        let pose = Isometry3::from_parts(Translation3::from(Vector3::from(b.translation)), UnitQuaternion::from_scaled_axis(rv));
+        if spec.bodies[..bi].iter().any(|o| o.name == b.name) {
+            return Err(loc.at(Some(&b.name), None, field, "duplicate body name"));
+        }
+        bodies.push(RigidBody { name: b.name.clone(), shape, pose, mu_static: b.friction, mu_kinetic: kinetic, rounding });
+    }
+    let mut part_ids = Vec::new();
+    for p in &spec.parts {
+        let i = parts.iter().position(|q| &q.name == p).ok_or_else(|| {
+            let known: Vec<&str> = parts.iter().map(|q| q.name.as_str()).collect();
+            loc.at_value("contact", p, "contact.parts", format!("unknown part \"{p}\"; parts: {}", known.join(", ")))
+        })?;
+        part_ids.push(i);
+    }
+    if !pos(spec.penalty_factor) {
+        return Err(loc.at(None, Some("penalty_factor"), "contact.penalty_factor", "expected a positive penalty factor"));
+    }
+    if spec.penalty.is_some_and(|k| !pos(k)) {
+        return Err(loc.at(None, Some("penalty"), "contact.penalty", "expected a positive nodal penalty (N/m)"));
+    }
+    if !pos(spec.tangential_factor) {
+        return Err(loc.at(None, Some("tangential_factor"), "contact.tangential_factor", "expected a positive tangential factor"));
+    }
+    if spec.stabilization.is_some_and(|c| !pos(c)) {
+        return Err(loc.at(None, Some("stabilization"), "contact.stabilization", "expected a positive stabilization coefficient (N/m³)"));
+    }
+    let dynamics = match &spec.dynamics {
+        None => None,
+        Some(d) => {
+            if !pos(d.time_step) {
+                return Err(loc.at(None, Some("time_step"), "contact.dynamics.time_step", "expected a positive time step (s)"));
+            }
+            if !(d.damping.is_finite() && d.damping >= 0.0) {
+                return Err(loc.at(None, Some("damping"), "contact.dynamics.damping", "expected a non-negative damping (1/s)"));
+            }
+            if d.areal_density.is_some_and(|r| !pos(r)) {
+                return Err(loc.at(None, Some("areal_density"), "contact.dynamics.areal_density", "expected a positive areal density"));
+            }
+            Some((d.time_step, d.damping, d.areal_density.unwrap_or(f64::NAN)))
+        }
+    };
+    Ok(ContactSetup {
+        dynamics,
+        bodies,
+        parts: part_ids,
+        settings: ContactSettings { penalty_factor: spec.penalty_factor, penalty: spec.penalty, tangential_factor: spec.tangential_factor },
+        stabilization: spec.stabilization,
+        warnings,
+    })
+}
+
+/// Adds the contact, stabilization and pseudo-dynamics terms of `setup` to `solver`.
+pub fn attach<'m>(solver: &mut crate::solver::Solver<'m>, model: &'m crate::model::Model, setup: &ContactSetup) {
+    solver.add_contribution(Box::new(ContactSet::new(model, setup.bodies.clone(), &setup.parts, &setup.settings)));
+    if let Some(k) = setup.stabilization {
+        solver.add_contribution(Box::new(Stabilization::new(model, k)));
+    }
+    if let Some((dt, eta, rho)) = setup.dynamics {
+        solver.add_contribution(Box::new(Inertia::new(model, dt, eta, rho)));
+    }
+}
+
+/// Largest penetration of any shell node's face (offset h/2) into any body at `state`, by
+/// a fresh, unbounded proximity query per node and body (independent of the penalty
+/// bookkeeping and its search reach).
+pub fn max_penetration(model: &crate::model::Model, state: &crate::model::State, bodies: &[RigidBody]) -> f64 {
+    use rayon::prelude::*;
+    let mut half = vec![0.0f64; model.n_nodes()];
+    for def in &model.elements {
+        for &a in &def.nodes {
+            half[a] = half[a].max(0.5 * model.sections[def.section].thickness);
+        }
+    }
+    (0..model.n_nodes())
+        .into_par_iter()
+        .map(|a| {
+            let x = model.position(state, a);
+            bodies.iter().filter_map(|b| b.proximity(&x, f64::MAX)).map(|p| half[a] - p.distance).fold(0.0, f64::max)
+        })
+        .reduce(|| 0.0, f64::max)
+}
+
+/// Writes the contact, stabilization and drape sections of summary.json into `extra`.
+pub fn summarize(
+    scene: &crate::scene::Scene,
+    setup: &ContactSetup,
+    model: &crate::model::Model,
+    state: &crate::model::State,
+    contributions: &[Box<dyn crate::solver::extra::Contribution + '_>],
+    extra: &mut std::collections::BTreeMap<String, serde_json::Value>,
+) {
+    for c in contributions {
+        if let Some((name, v)) = c.summary() {
+            extra.insert(name, v);
+        }
+    }
+    if !setup.warnings.is_empty() {
+        extra.insert("contact_warnings".into(), serde_json::json!(setup.warnings));
+    }
+    if let Some(d) = &scene.drape {
+        let res = d.resolution.unwrap_or(d.specimen_radius / 1000.0);
+        let pen = max_penetration(model, state, &setup.bodies);
+        let rep = drape::drape_report(model, state, &Vector3::from(d.center), d.disc_radius, d.specimen_radius, res, pen);
+        if let Ok(v) = serde_json::to_value(rep) {
+            extra.insert("drape".into(), v);
+        }
+    }
+}

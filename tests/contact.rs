@@ -1,0 +1,262 @@
+//! Contact with rigid bodies: reaction of a fabric resting on a plane, Coulomb friction on
+//! an inclined plane, penetration of cloth draped over a sphere and over a triangle-mesh
+//! body (checked by an independent parry3d query), and trimesh repair/rejection.
+//!
+//! References: static equilibrium (the reaction of a body at rest on a support equals its
+//! weight); Coulomb's law of friction (a block on an incline sticks while tan θ ≤ μ_s and,
+//! sliding, is resisted by μ_k N — with the viscous pseudo-time term c·a·u̇ the steady slide
+//! per increment is ρg(sin θ − μ_k cos θ)/c); the issue's penetration bound (5 % of the
+//! thickness) for the penalty.
+
+use std::path::PathBuf;
+
+use nalgebra::Vector3;
+use parry3d_f64::math::Vector as PVec;
+use parry3d_f64::query::PointQuery;
+use parry3d_f64::shape::{TriMesh, TriMeshFlags};
+use plyshell::analysis;
+use plyshell::material::FabricProperties;
+use plyshell::model::State;
+use plyshell::scene::{self, BuiltScene};
+use plyshell::solver::{IncrementReport, Solver};
+
+const G: f64 = 9.81;
+
+fn data_dir() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data")
+}
+
+fn build(text: &str) -> (scene::Scene, BuiltScene) {
+    let file = data_dir().join("contact_scene.ron").display().to_string();
+    let sc = scene::parse(&file, text).expect("parse");
+    let built = scene::build(&sc, &file, text).expect("build");
+    (sc, built)
+}
+
+/// Runs the scene through the solver with its contact terms; returns the built scene, the
+/// final state and the converged increments' reports.
+fn solve(text: &str) -> (BuiltScene, State, Vec<IncrementReport>) {
+    let (sc, built) = build(text);
+    let mut reports = Vec::new();
+    let state = {
+        let mut solver = Solver::new(&built.model, sc.solver.clone()).expect("solver");
+        plyshell::contact::attach(&mut solver, &built.model, built.contact.as_ref().expect("contact"));
+        let mut state = built.model.initial_state();
+        solver.run(&built.steps, &mut state, &mut |r, _, _| reports.push(r.clone()), &mut |_| {}).expect("solve");
+        state
+    };
+    (built, state, reports)
+}
+
+fn contact_reports(s: &[IncrementReport]) -> Vec<serde_json::Value> {
+    s.iter().map(|i| i.extra.iter().rev().find_map(|v| v.get("contact").cloned()).expect("contact report")).collect()
+}
+
+/// A 0.2 m square of cotton broadcloth (8×8) laid on a plane at z = 0, its face touching
+/// (mid-surface at h/2 − 1 nm), under its own weight: the summed normal contact force equals
+/// the weight ρ g A within 0.5 %.
+#[test]
+fn fabric_on_plane_carries_its_weight() {
+    let p = FabricProperties::preset("cotton_broadcloth").expect("preset");
+    let z0 = 0.5 * p.thickness - 1e-9;
+    let text = format!(
+        "Scene(name: \"on_plane\", materials: {{\"f\": Fabric((preset: Some(\"cotton_broadcloth\")))}},
+         parts: [(name: \"cloth\", mesh: Rectangle(lx: 0.2, ly: 0.2, nx: 8, ny: 8), material: \"f\", thickness: {h})],
+         loads: {{\"weight\": SelfWeight(part: \"cloth\", g: (0.0, 0.0, -{G}))}},
+         steps: [(name: \"settle\", increments: 2, scale: {{\"weight\": 1.0}})],
+         contact: Some((bodies: [(name: \"floor\", shape: Plane, translation: (0.0, 0.0, -{z0}), friction: 0.3)])))",
+        h = p.thickness
+    );
+    let (_, _, summary) = solve(&text);
+    let last = contact_reports(&summary).pop().expect("report");
+    let reaction = last["normal_force"].as_f64().expect("force");
+    let weight = p.areal_density * G * 0.2 * 0.2;
+    let err = reaction / weight - 1.0;
+    println!("reaction {reaction:.6e} N, weight {weight:.6e} N, error {err:.2e}, active {}", last["active"]);
+    assert!(err.abs() < 0.005, "reaction {reaction} vs weight {weight}");
+    assert_eq!(last["active"].as_u64(), Some(81));
+}
+
+/// Inclined-plane scene: gravity tilted by `theta_deg` (equivalent to tilting the plane),
+/// static μ_s = 0.4, kinetic μ_k = 0.3, viscous stabilization c; gravity ramped in one
+/// increment, then held for 6 increments. Returns the down-slope displacement of the
+/// centre node after each increment.
+fn incline(theta_deg: f64, c: f64) -> Vec<f64> {
+    let p = FabricProperties::preset("cotton_broadcloth").expect("preset");
+    let z0 = 0.5 * p.thickness - 1e-9;
+    let t = theta_deg.to_radians();
+    let text = format!(
+        "Scene(name: \"incline\", materials: {{\"f\": Fabric((preset: Some(\"cotton_broadcloth\")))}},
+         parts: [(name: \"cloth\", mesh: Rectangle(lx: 0.1, ly: 0.1, nx: 4, ny: 4), material: \"f\", thickness: {h})],
+         loads: {{\"weight\": SelfWeight(part: \"cloth\", g: (0.0, {gy:.15e}, {gz:.15e}))}},
+         monitors: [(name: \"centre\", point: (0.05, 0.05, 0.0), dofs: [Uy])],
+         steps: [(name: \"ramp\", increments: 1, scale: {{\"weight\": 1.0}}), (name: \"hold\", increments: 6)],
+         contact: Some((bodies: [(name: \"incline\", shape: Plane, translation: (0.0, 0.0, -{z0}), friction: 0.4, kinetic_friction: Some(0.3))],
+                        stabilization: Some({c:e}))))",
+        h = p.thickness,
+        gy = -G * t.sin(),
+        gz = -G * t.cos()
+    );
+    let (sc, built) = build(&text);
+    let summary = analysis::run(&sc, &built, &Default::default(), &mut |_| {}).expect("solve");
+    summary.monitors[0].values.iter().map(|v| -v[0]).collect()
+}
+
+/// Sticks below the friction angle (15° and 20°: tan θ < μ_s = 0.4, the latter above
+/// μ_k = 0.3, so only static friction holds it) and slides above it (25°) at the kinetic
+/// rate ρg(sin θ − μ_k cos θ)/c per increment, within 2 %.
+#[test]
+fn incline_sticks_below_and_slides_above_friction_angle() {
+    let p = FabricProperties::preset("cotton_broadcloth").expect("preset");
+    let c = 1.0e3;
+    for theta in [15.0, 20.0] {
+        let u = incline(theta, c);
+        let creep = u.iter().copied().fold(0.0, f64::max);
+        let drift = (u[u.len() - 1] - u[1]).abs();
+        println!("θ = {theta}°: max down-slope displacement {creep:.3e} m, drift over the hold {drift:.3e} m");
+        // Elastic stick creep only: W sin θ / k_t per node is below a micrometre.
+        assert!(creep < 1e-6 && drift < 1e-9, "θ = {theta}: {u:?}");
+    }
+    let theta: f64 = 25.0;
+    let u = incline(theta, c);
+    let t = theta.to_radians();
+    let rate = p.areal_density * G * (t.sin() - 0.3 * t.cos()) / c;
+    let steps: Vec<f64> = u.windows(2).map(|w| w[1] - w[0]).collect();
+    println!("θ = 25°: slide per increment {steps:?}, expected {rate:.6e}");
+    for s in &steps {
+        assert!((s / rate - 1.0).abs() < 0.02, "slide {s} vs {rate}");
+    }
+}
+
+/// A triangulated sphere (UV sphere, `nu` × `nv`) as OBJ text, outward orientation.
+fn sphere_obj(r: f64, center: [f64; 3], nu: usize, nv: usize) -> String {
+    let mut s = String::new();
+    let pi = std::f64::consts::PI;
+    s += &format!("v {} {} {}\n", center[0], center[1], center[2] + r);
+    for i in 1..nv {
+        let th = pi * i as f64 / nv as f64;
+        for j in 0..nu {
+            let ph = 2.0 * pi * j as f64 / nu as f64;
+            s += &format!("v {} {} {}\n", center[0] + r * th.sin() * ph.cos(), center[1] + r * th.sin() * ph.sin(), center[2] + r * th.cos());
+        }
+    }
+    s += &format!("v {} {} {}\n", center[0], center[1], center[2] - r);
+    let ring = |i: usize, j: usize| 2 + (i - 1) * nu + (j % nu);
+    for j in 0..nu {
+        s += &format!("f 1 {} {}\n", ring(1, j), ring(1, j + 1));
+    }
+    for i in 1..nv - 1 {
+        for j in 0..nu {
+            s += &format!("f {} {} {} {}\n", ring(i, j), ring(i + 1, j), ring(i + 1, j + 1), ring(i, j + 1));
+        }
+    }
+    let last = 2 + (nv - 1) * nu;
+    for j in 0..nu {
+        s += &format!("f {} {} {}\n", ring(nv - 1, j + 1), ring(nv - 1, j), last);
+    }
+    s
+}
+
+/// Drape scene: a `n`×`n` square of light cotton, side 0.3 m, centred over a body whose top
+/// is at z = 0, falling under gravity (backward-Euler pseudo-dynamics, Δt = 1.5 ms, `increments`
+/// steps after the first); returns the built scene, final state and increment reports.
+fn drape_over(body: &str, n: usize, increments: usize) -> (BuiltScene, State, Vec<IncrementReport>) {
+    let p = FabricProperties::preset("light_cotton").expect("preset");
+    let z = 0.5 * p.thickness;
+    let text = format!(
+        "Scene(name: \"drape\", materials: {{\"f\": Fabric((preset: Some(\"light_cotton\")))}},
+         parts: [(name: \"cloth\", mesh: Rectangle(lx: 0.3, ly: 0.3, nx: {n}, ny: {n}), material: \"f\", thickness: {h})],
+         node_sets: {{\"centre\": Nearest(point: (0.15, 0.15, 0.0))}},
+         boundary: [Fix(set: \"centre\", dofs: [Ux, Uy])],
+         loads: {{\"weight\": SelfWeight(part: \"cloth\", g: (0.0, 0.0, -{G}))}},
+         steps: [(name: \"drape\", increments: 1, scale: {{\"weight\": 1.0}}), (name: \"fall\", increments: {increments})],
+         contact: Some((bodies: [{body}], dynamics: Some((time_step: 1.5e-3, damping: 20.0)))),
+         output: (vtu: false))",
+        h = p.thickness
+    );
+    let text = text.replace("TOPZ", &format!("{:.9e}", -z));
+    solve(&text)
+}
+
+/// Largest penetration of the shell face (offset h/2) into a sphere, by direct geometry.
+fn sphere_penetration(built: &BuiltScene, st: &State, c: Vector3<f64>, r: f64, h: f64) -> f64 {
+    (0..built.model.n_nodes()).map(|a| 0.5 * h - ((built.model.position(st, a) - c).norm() - r)).fold(0.0, f64::max)
+}
+
+/// Cloth draped (frictionless) over a sphere (R = 0.08 m) and over the same sphere as a
+/// triangle mesh, 0.18 s of fall:
+/// the largest penetration of the shell face, by an independent parry3d distance query
+/// (a TriMesh built here, and the analytic sphere), stays below 5 % of the thickness.
+#[test]
+fn cloth_over_sphere_and_trimesh_does_not_penetrate() {
+    let p = FabricProperties::preset("light_cotton").expect("preset");
+    let h = p.thickness;
+    let r = 0.08;
+    let c = Vector3::new(0.15, 0.15, -r - 0.5 * h);
+    let body = format!("(name: \"ball\", shape: Sphere(radius: {r}), translation: ({}, {}, {:.12e}))", c.x, c.y, c.z);
+    let (built, st, summary) = drape_over(&body, 12, 120);
+    let pen = sphere_penetration(&built, &st, c, r, h);
+    let sag = (0..built.model.n_nodes()).map(|a| -st.u[a].z).fold(0.0, f64::max);
+    println!("sphere: penetration {pen:.3e} m ({:.3} % of h), max sag {sag:.4} m, iterations {}", 100.0 * pen / h, summary.iter().map(|r| r.iterations).sum::<usize>());
+    assert!(pen < 0.05 * h, "penetration {pen} vs thickness {h}");
+    assert!(sag > 0.05, "the cloth should drape over the sphere, sagged only {sag}");
+
+    // The same sphere as a triangle mesh (48 × 24 UV sphere).
+    let obj = sphere_obj(r, [0.0, 0.0, 0.0], 48, 24);
+    let path = data_dir().join("uv_sphere.obj");
+    std::fs::write(&path, &obj).expect("write obj");
+    let body = format!("(name: \"mesh\", shape: TriMesh(path: \"uv_sphere.obj\"), translation: ({}, {}, {:.12e}))", c.x, c.y, c.z);
+    let (built, st, summary) = drape_over(&body, 12, 120);
+    let soup = plyshell::contact::trimesh_io::parse_obj(&obj).expect("obj");
+    let mesh = TriMesh::with_flags(
+        soup.vertices.iter().map(|v| PVec::new(v.x + c.x, v.y + c.y, v.z + c.z)).collect(),
+        soup.triangles.clone(),
+        TriMeshFlags::ORIENTED,
+    )
+    .expect("trimesh");
+    let mut pen: f64 = 0.0;
+    for a in 0..built.model.n_nodes() {
+        let x = built.model.position(&st, a);
+        let q = PVec::new(x.x, x.y, x.z);
+        let proj = mesh.project_local_point(q, false);
+        let d = (q - proj.point).length();
+        let signed = if proj.is_inside { -d } else { d };
+        pen = pen.max(0.5 * h - signed);
+    }
+    let sag = (0..built.model.n_nodes()).map(|a| -st.u[a].z).fold(0.0, f64::max);
+    println!("trimesh: penetration {pen:.3e} m ({:.3} % of h), max sag {sag:.4} m, iterations {}", 100.0 * pen / h, summary.iter().map(|r| r.iterations).sum::<usize>());
+    assert!(pen < 0.05 * h, "penetration {pen} vs thickness {h}");
+    assert!(sag > 0.05, "the cloth should drape over the mesh, sagged only {sag}");
+}
+
+/// A mesh with a degenerate triangle and one flipped face is repaired with warnings naming
+/// the file; a non-manifold mesh (three triangles on one edge) is rejected with an error
+/// naming the file and the edge.
+#[test]
+fn bad_trimesh_is_repaired_or_rejected() {
+    let cube = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n";
+    let good = "f 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\nf 3 4 8 7\nf 4 1 5 8\n";
+    // Face 2-3-7-6 flipped, plus a degenerate triangle.
+    std::fs::write(data_dir().join("bad_cube.obj"), format!("{cube}{good}f 2 6 7 3\nf 1 1 2\n")).expect("write");
+    let text = |file: &str| {
+        format!(
+            "Scene(name: \"bad\", materials: {{\"f\": Fabric((preset: Some(\"light_cotton\")))}},
+             parts: [(name: \"cloth\", mesh: Rectangle(lx: 0.1, ly: 0.1, nx: 2, ny: 2), material: \"f\", thickness: 0.25e-3)],
+             steps: [(name: \"s\", increments: 1)],
+             contact: Some((bodies: [(name: \"box\", shape: TriMesh(path: \"{file}\"), translation: (0.0, 0.0, -2.0))])))"
+        )
+    };
+    let (_, built) = build(&text("bad_cube.obj"));
+    let w = &built.contact.as_ref().expect("contact").warnings;
+    println!("warnings: {w:?}");
+    assert!(w.iter().any(|m| m.contains("bad_cube.obj") && m.contains("degenerate")), "{w:?}");
+    assert!(w.iter().any(|m| m.contains("bad_cube.obj") && m.contains("flipped")), "{w:?}");
+    // Non-manifold: a fin triangle on edge 1–2.
+    std::fs::write(data_dir().join("nonmanifold.obj"), format!("{cube}v 0.5 -1 0\n{good}f 2 3 7 6\nf 1 2 9\n")).expect("write");
+    let t = text("nonmanifold.obj");
+    let file = data_dir().join("contact_scene.ron").display().to_string();
+    let sc = scene::parse(&file, &t).expect("parse");
+    let err = scene::build(&sc, &file, &t).expect_err("non-manifold must be rejected").to_string();
+    println!("error: {err}");
+    assert!(err.contains("nonmanifold.obj") && err.contains("non-manifold edge") && err.contains("contact.bodies[box].path"), "{err}");
+}
