@@ -4,7 +4,7 @@
 //!
 //! ```
 //! use plyshell::{analysis, scene};
-//! let text = include_str!("../garments/demo.ron")
+//! let text = include_str!("../garments/examples/roll_up.ron")
 //!     .replace("increments: 40", "increments: 4")
 //!     .replace("{\"end_moment\": 1.0}", "{\"end_moment\": 0.25}");
 //! let sc = scene::parse("demo.ron", &text).expect("a valid scene");

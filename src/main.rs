@@ -11,8 +11,10 @@ use plyshell::scene::{self, Scene};
 use plyshell::solver::Progress;
 use plyshell::{bench, scene::BuiltScene};
 
-/// The bundled default scene solved by `plyshell demo`.
-const DEMO_SCENE: &str = include_str!("../garments/demo.ron");
+/// The bundled default scene solved by `plyshell demo`: the three-ply NBC sleeve garment.
+const DEMO_SCENE: &str = include_str!("../garments/nbc_sleeve.ron");
+/// The name the bundled demo scene's messages carry.
+const DEMO_NAME: &str = "garments/nbc_sleeve.ron (bundled)";
 
 #[derive(Parser)]
 #[command(name = "plyshell", version, about = "Nonlinear shell finite elements for layered protective garments")]
@@ -34,7 +36,8 @@ enum Command {
         #[arg(long)]
         quiet: bool,
     },
-    /// Solve the bundled default scene (a strip rolled into a full circle).
+    /// Solve the bundled default scene: a three-ply NBC sleeve (outer shell, carbon layer,
+    /// liner) with an underarm seam and quilting lines, hung under its own weight.
     Demo {
         /// Output directory.
         #[arg(long, default_value = "out/demo")]
@@ -62,8 +65,8 @@ fn main() -> ExitCode {
         Command::Solve { scene, out, quiet } => scene::load(&scene)
             .map_err(|e| e.to_string())
             .and_then(|(s, b)| solve(&s, &b, &out, quiet)),
-        Command::Demo { out } => scene::parse("garments/demo.ron (bundled)", DEMO_SCENE)
-            .and_then(|s| scene::build(&s, "garments/demo.ron (bundled)", DEMO_SCENE).map(|b| (s, b)))
+        Command::Demo { out } => scene::parse(DEMO_NAME, DEMO_SCENE)
+            .and_then(|s| scene::build(&s, DEMO_NAME, DEMO_SCENE).map(|b| (s, b)))
             .map_err(|e| e.to_string())
             .and_then(|(s, b)| solve(&s, &b, &out, false)),
         Command::Check { scene } => scene::load(&scene).map_err(|e| e.to_string()).map(|(s, b)| check(&s, &b)),

@@ -48,7 +48,7 @@ print(json.dumps(result))
 
 #[test]
 fn vtu_and_pvd_open_in_meshio_with_the_solver_numbers() {
-    let text = include_str!("../garments/demo.ron").replace("increments: 40", "increments: 8").replace("every: 2", "every: 1");
+    let text = include_str!("../garments/examples/roll_up.ron").replace("increments: 40", "increments: 8").replace("every: 2", "every: 1");
     let sc = scene::parse("demo", &text).expect("parse");
     let built = scene::build(&sc, "demo", &text).expect("build");
     let out = Path::new(env!("CARGO_MANIFEST_DIR")).join("target/test-output/export_meshio");
