@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Renders a plyshell garment VTU (quads coloured by panel and ply, seams as red lines) to a PNG.
 
-Usage: render_garment.py GARMENT.vtu OUT.png [TITLE]   (needs meshio and matplotlib)
+Usage: render_garment.py GARMENT.vtu OUT.png [TITLE [ELEV AZIM]]   (needs meshio and matplotlib;
+view angles in degrees, default 20 -60)
 """
 import sys
 
@@ -17,6 +18,7 @@ from mpl_toolkits.mplot3d.art3d import Line3DCollection, Poly3DCollection
 def main():
     src, out = sys.argv[1], sys.argv[2]
     title = sys.argv[3] if len(sys.argv) > 3 else src
+    elev, azim = (float(sys.argv[4]), float(sys.argv[5])) if len(sys.argv) > 5 else (20.0, -60.0)
     m = meshio.read(src)
     pts = m.points
     fig = plt.figure(figsize=(7, 7))
@@ -37,7 +39,7 @@ def main():
     ax.set_ylim(c[1] - r, c[1] + r)
     ax.set_zlim(c[2] - r, c[2] + r)
     ax.set_title(title)
-    ax.view_init(elev=20, azim=-60)
+    ax.view_init(elev=elev, azim=azim)
     fig.savefig(out, dpi=110, bbox_inches="tight")
 
 
