@@ -155,12 +155,12 @@ pub fn build_contact(spec: &ContactSpec, loc: &Locator, base_dir: &Path, parts: 
 
 /// Adds the contact, stabilization and pseudo-dynamics terms of `setup` to `solver`.
 pub fn attach<'m>(solver: &mut crate::solver::Solver<'m>, model: &'m crate::model::Model, setup: &ContactSetup) {
-    solver.add_contribution(Box::new(ContactSet::new(model, setup.bodies.clone(), &setup.parts, &setup.settings)));
+    solver.add_nodal_forces(Box::new(ContactSet::new(model, setup.bodies.clone(), &setup.parts, &setup.settings)));
     if let Some(k) = setup.stabilization {
-        solver.add_contribution(Box::new(Stabilization::new(model, k)));
+        solver.add_nodal_forces(Box::new(Stabilization::new(model, k)));
     }
     if let Some((dt, eta, rho)) = setup.dynamics {
-        solver.add_contribution(Box::new(Inertia::new(model, dt, eta, rho)));
+        solver.add_nodal_forces(Box::new(Inertia::new(model, dt, eta, rho)));
     }
 }
 
@@ -190,7 +190,7 @@ pub fn summarize(
     setup: &ContactSetup,
     model: &crate::model::Model,
     state: &crate::model::State,
-    contributions: &[Box<dyn crate::solver::extra::Contribution + '_>],
+    contributions: &[Box<dyn crate::solver::NodalForces + '_>],
     extra: &mut std::collections::BTreeMap<String, serde_json::Value>,
 ) {
     for c in contributions {

@@ -11,13 +11,12 @@
 //! the remaining ratio ‖f_visc‖/‖f_ext‖ so a user can see how settled it is.
 //! This is a stop-gap until the damped implicit dynamics solver (issue 3) is merged.
 
-use nalgebra::Vector3;
+use nalgebra::{Matrix3, Vector3};
 use serde::Serialize;
 
-use crate::assembly::Pattern;
 use crate::element::NODE_DOFS;
-use crate::model::{Model, State, FIXED};
-use crate::solver::extra::{slot, Contribution};
+use crate::model::{Model, State};
+use crate::solver::NodalForces;
 
 /// Viscous stabilization of a model's nodes.
 pub struct Stabilization {
@@ -25,7 +24,6 @@ pub struct Stabilization {
     pub coefficient: f64,
     area: Vec<f64>,
     previous: Vec<Vector3<f64>>,
-    slots: Option<Vec<[Option<usize>; 3]>>,
     /// Per committed increment: ‖f_visc‖ and the largest nodal motion.
     pub history: Vec<StabilizationIncrement>,
 }
@@ -49,30 +47,18 @@ impl Stabilization {
                 area[n] += 0.25 * a;
             }
         }
-        Self { coefficient: c, area, previous: vec![Vector3::zeros(); model.n_nodes()], slots: None, history: Vec::new() }
+        Self { coefficient: c, area, previous: vec![Vector3::zeros(); model.n_nodes()], history: Vec::new() }
     }
 }
 
-impl Contribution for Stabilization {
-    fn add(&mut self, model: &Model, state: &State, pattern: &Pattern, f_int: &mut [f64], values: Option<&mut [f64]>) {
+impl NodalForces for Stabilization {
+    fn add(&mut self, _model: &Model, state: &State, f_ext: &mut [f64], jacobian: &mut Vec<(usize, Matrix3<f64>)>) {
         for (n, (&a, prev)) in self.area.iter().zip(&self.previous).enumerate() {
             let f = (state.u[n] - prev) * (self.coefficient * a);
             for k in 0..3 {
-                f_int[NODE_DOFS * n + k] += f[k];
+                f_ext[NODE_DOFS * n + k] -= f[k];
             }
-        }
-        let eq = &model.dofs.eq;
-        let slots = self.slots.get_or_insert_with(|| {
-            (0..model.n_nodes())
-                .map(|n| std::array::from_fn(|k| if eq[NODE_DOFS * n + k] == FIXED { None } else { slot(pattern, eq[NODE_DOFS * n + k], eq[NODE_DOFS * n + k]) }))
-                .collect()
-        });
-        if let Some(v) = values {
-            for (n, s) in slots.iter().enumerate() {
-                for sk in s.iter().flatten() {
-                    v[*sk] += self.coefficient * self.area[n];
-                }
-            }
+            jacobian.push((n, Matrix3::identity() * (-self.coefficient * a)));
         }
     }
 
@@ -123,7 +109,6 @@ pub struct Inertia {
     mass: Vec<f64>,
     previous: Vec<Vector3<f64>>,
     velocity: Vec<Vector3<f64>>,
-    slots: Option<Vec<[Option<usize>; 3]>>,
     /// Per committed increment: kinetic energy and largest speed.
     pub history: Vec<InertiaIncrement>,
 }
@@ -150,7 +135,7 @@ impl Inertia {
             }
         }
         let n = model.n_nodes();
-        Self { time_step, current_step: time_step, damping, mass, previous: vec![Vector3::zeros(); n], velocity: vec![Vector3::zeros(); n], slots: None, history: Vec::new() }
+        Self { time_step, current_step: time_step, damping, mass, previous: vec![Vector3::zeros(); n], velocity: vec![Vector3::zeros(); n], history: Vec::new() }
     }
 
     fn stiffness(&self, n: usize) -> f64 {
@@ -159,35 +144,20 @@ impl Inertia {
     }
 }
 
-impl Contribution for Inertia {
+impl NodalForces for Inertia {
     fn begin_increment(&mut self, fraction: f64) {
         self.current_step = self.time_step * fraction.clamp(1e-6, 1.0);
     }
 
-    fn add(&mut self, model: &Model, state: &State, pattern: &Pattern, f_int: &mut [f64], values: Option<&mut [f64]>) {
+    fn add(&mut self, model: &Model, state: &State, f_ext: &mut [f64], jacobian: &mut Vec<(usize, Matrix3<f64>)>) {
         let dt = self.current_step;
         for n in 0..model.n_nodes() {
             let du = state.u[n] - self.previous[n];
             let f = (du - self.velocity[n] * dt) * (self.mass[n] / (dt * dt)) + du * (self.damping * self.mass[n] / dt);
             for k in 0..3 {
-                f_int[NODE_DOFS * n + k] += f[k];
+                f_ext[NODE_DOFS * n + k] -= f[k];
             }
-        }
-        let eq = &model.dofs.eq;
-        if self.slots.is_none() {
-            self.slots = Some(
-                (0..model.n_nodes())
-                    .map(|n| std::array::from_fn(|k| if eq[NODE_DOFS * n + k] == FIXED { None } else { slot(pattern, eq[NODE_DOFS * n + k], eq[NODE_DOFS * n + k]) }))
-                    .collect(),
-            );
-        }
-        if let (Some(v), Some(slots)) = (values, self.slots.as_ref()) {
-            for (n, s) in slots.iter().enumerate() {
-                let k = self.stiffness(n);
-                for sk in s.iter().flatten() {
-                    v[*sk] += k;
-                }
-            }
+            jacobian.push((n, Matrix3::identity() * -self.stiffness(n)));
         }
     }
 
