@@ -158,9 +158,11 @@ fn sphere_obj(r: f64, center: [f64; 3], nu: usize, nv: usize) -> String {
 }
 
 /// Drape scene: a `n`×`n` square of light cotton, side 0.3 m, centred over a body whose top
-/// is at z = 0, falling under gravity (backward-Euler pseudo-dynamics, Δt = 1.5 ms, `increments`
-/// steps after the first); returns the built scene, final state and increment reports.
+/// is at z = 0, falling under gravity for `increments` time steps of a `Dynamic` step
+/// (backward Euler, Δt = 1.5 ms at most, mass damping 20/s); returns the built scene, final
+/// state and increment reports.
 fn drape_over(body: &str, n: usize, increments: usize) -> (BuiltScene, State, Vec<IncrementReport>) {
+    let duration = 1.5e-3 * increments as f64;
     let p = FabricProperties::preset("light_cotton").expect("preset");
     let z = 0.5 * p.thickness;
     let text = format!(
@@ -169,8 +171,9 @@ fn drape_over(body: &str, n: usize, increments: usize) -> (BuiltScene, State, Ve
          node_sets: {{\"centre\": Nearest(point: (0.15, 0.15, 0.0))}},
          boundary: [Fix(set: \"centre\", dofs: [Ux, Uy])],
          loads: {{\"weight\": SelfWeight(part: \"cloth\", g: (0.0, 0.0, -{G}))}},
-         steps: [(name: \"drape\", increments: 1, scale: {{\"weight\": 1.0}}), (name: \"fall\", increments: {increments})],
-         contact: Some((bodies: [{body}], dynamics: Some((time_step: 1.5e-3, damping: 20.0)))),
+         steps: [(name: \"fall\", increments: 1, scale: {{\"weight\": 1.0}},
+                  kind: Dynamic((dt: 1.5e-3, dt_max: 1.5e-3, mass_damping: 20.0, duration: {duration:e})))],
+         contact: Some((bodies: [{body}])),
          output: (vtu: false))",
         h = p.thickness
     );
