@@ -87,7 +87,7 @@ pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &m
                 let t = Instant::now();
                 let name = format!("{}_{:04}.vtu", scene.name, pvd_entries.len() + 1);
                 let mut export = export.clone();
-                export.extra_point_data = solved.contributions().iter().flat_map(|c| c.point_data(model, st)).collect();
+                export.extra_point_data = solved.nodal_forces().iter().flat_map(|c| c.point_data(model, st)).collect();
                 match write_state_vtu(&dir.join(&name), model, st, &export) {
                     Ok(()) => pvd_entries.push((report.time, name)),
                     Err(e) => io_error = io_error.take().or(Some(e.to_string())),
@@ -120,7 +120,7 @@ pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &m
     );
     summary.timings = solver.timings.clone();
     if let Some(c) = &built.contact {
-        crate::contact::summarize(scene, c, model, &state, solver.contributions(), &mut summary.extra);
+        crate::contact::summarize(scene, c, model, &state, solver.nodal_forces(), &mut summary.extra);
     }
     if let Some(e) = io_error {
         return Err(RunError::Io(e));

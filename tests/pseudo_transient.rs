@@ -191,7 +191,7 @@ struct TipSprings {
 }
 
 impl plyshell::solver::NodalForces for TipSprings {
-    fn add(&self, _: &plyshell::model::Model, state: &plyshell::model::State, f_ext: &mut [f64], jacobian: &mut Vec<(usize, nalgebra::Matrix3<f64>)>) {
+    fn add(&mut self, _: &plyshell::model::Model, state: &plyshell::model::State, f_ext: &mut [f64], jacobian: &mut Vec<(usize, nalgebra::Matrix3<f64>)>) {
         for &n in &self.nodes {
             f_ext[5 * n + 2] -= self.k * state.u[n].z;
             let mut j = nalgebra::Matrix3::zeros();
@@ -221,7 +221,7 @@ fn nodal_force_hook_adds_springs_to_residual_and_tangent() {
     let solve = |springs: Option<f64>, steps: &[StepPlan]| {
         let mut solver = Solver::new(&built.model, sc.solver.clone()).expect("solver");
         if let Some(k) = springs {
-            solver.set_nodal_forces(Box::new(TipSprings { nodes: tip.clone(), k: k / tip.len() as f64 }));
+            solver.add_nodal_forces(Box::new(TipSprings { nodes: tip.clone(), k: k / tip.len() as f64 }));
         }
         let mut state = built.model.initial_state();
         let mut its = 0;
@@ -242,7 +242,7 @@ fn nodal_force_hook_adds_springs_to_residual_and_tangent() {
         kind: StepKind::Dynamic(plyshell::solver::DynamicSettings { dt: 0.01, dt_max: 1e3, rest_residual_tol: 1e-9, ..Default::default() }),
     }];
     let mut solver = Solver::new(&built.model, sc.solver.clone()).expect("solver");
-    solver.set_nodal_forces(Box::new(TipSprings { nodes: tip.clone(), k: k_b / tip.len() as f64 }));
+    solver.add_nodal_forces(Box::new(TipSprings { nodes: tip.clone(), k: k_b / tip.len() as f64 }));
     let mut state = built.model.initial_state();
     if let Err(e) = solver.run(&dynamic, &mut state, &mut |_, _, _| {}, &mut |_| {}) {
         panic!("{e}");

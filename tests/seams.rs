@@ -294,7 +294,7 @@ struct Spring {
 }
 
 impl plyshell::solver::NodalForces for Spring {
-    fn add(&self, _model: &plyshell::model::Model, state: &plyshell::model::State, f_ext: &mut [f64], jacobian: &mut Vec<(usize, nalgebra::Matrix3<f64>)>) {
+    fn add(&mut self, _model: &plyshell::model::Model, state: &plyshell::model::State, f_ext: &mut [f64], jacobian: &mut Vec<(usize, nalgebra::Matrix3<f64>)>) {
         for a in 0..3 {
             f_ext[5 * self.node + a] -= self.k * state.u[self.node][a];
         }
@@ -332,7 +332,7 @@ fn nodal_forces_on_tied_slaves_fold_onto_masters() {
             .min_by(|&a, &b| (model.x0[a] - nalgebra::Vector3::new(0.5 * L, 0.0, 0.0)).norm().total_cmp(&(model.x0[b] - nalgebra::Vector3::new(0.5 * L, 0.0, 0.0)).norm()))
             .unwrap_or(0);
         let mut solver = Solver::new(model, sc.solver.clone()).unwrap_or_else(|e| panic!("{e}"));
-        solver.set_nodal_forces(Box::new(Spring { node, k: 50.0 }));
+        solver.add_nodal_forces(Box::new(Spring { node, k: 50.0 }));
         let mut state = model.initial_state();
         solver.run(&built.steps, &mut state, &mut |_, _, _| {}, &mut |_| {}).unwrap_or_else(|e| panic!("{e}"));
         state.u[built.monitors[0].node].z

@@ -33,10 +33,9 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use super::body::{RigidBody, Shape};
-use crate::assembly::Pattern;
 use crate::element::NODE_DOFS;
-use crate::model::{Model, State, FIXED};
-use crate::solver::extra::{slot, Contribution};
+use crate::model::{Model, State};
+use crate::solver::NodalForces;
 
 /// A pair counts as sliding (and its anchor is dragged along on commit) when k_t|s| > 2μλ,
 /// i.e. the regularised friction force exceeds tanh 2 = 96 % of μλ.
@@ -115,7 +114,6 @@ pub struct ContactSet {
     history: Vec<PairHistory>,
     committed_x: Vec<Vector3<f64>>,
     last: Vec<PairEval>,
-    slots: Option<Vec<[Option<usize>; 9]>>,
     search_s: f64,
     /// Reject trial states with a mid-surface through a body (see `add`).
     pub reject_through: bool,
@@ -166,7 +164,6 @@ impl ContactSet {
             tangential_factor: settings.tangential_factor,
             history: vec![PairHistory::default(); np],
             last: vec![PairEval::default(); np],
-            slots: None,
             search_s: 0.0,
             reject_through: true,
             increments: Vec::new(),
@@ -242,26 +239,6 @@ impl ContactSet {
             .collect()
     }
 
-    /// Upper-triangle slots of each participating node's 3×3 translation block.
-    fn node_slots(model: &Model, pattern: &Pattern, nodes: &[usize]) -> Vec<[Option<usize>; 9]> {
-        let eq = &model.dofs.eq;
-        nodes
-            .iter()
-            .map(|&a| {
-                let mut s = [None; 9];
-                for i in 0..3 {
-                    for j in i..3 {
-                        let (r, c) = (eq[NODE_DOFS * a + i], eq[NODE_DOFS * a + j]);
-                        if r != FIXED && c != FIXED {
-                            s[3 * i + j] = slot(pattern, r, c);
-                        }
-                    }
-                }
-                s
-            })
-            .collect()
-    }
-
     /// Largest penetration (−gap) of the last evaluation, m.
     pub fn max_penetration(&self) -> f64 {
         self.last.iter().filter(|e| e.active).map(|e| -e.gap).fold(0.0, f64::max)
@@ -295,16 +272,15 @@ fn distance_hessian(body: &RigidBody, x: &Vector3<f64>, n: &Vector3<f64>, d: f64
     }
 }
 
-impl Contribution for ContactSet {
-    fn add(&mut self, model: &Model, state: &State, pattern: &Pattern, f_int: &mut [f64], values: Option<&mut [f64]>) {
+impl NodalForces for ContactSet {
+    /// Contact forces −f (f the internal force k_n g n plus friction of each pair) and their
+    /// 3×3 Jacobian −K per node.
+    fn add(&mut self, model: &Model, state: &State, f_ext: &mut [f64], jacobian: &mut Vec<(usize, Matrix3<f64>)>) {
         let t = Instant::now();
-        let out = self.evaluate(model, state, values.is_some());
+        let out = self.evaluate(model, state, true);
         self.search_s += t.elapsed().as_secs_f64();
-        if self.slots.is_none() {
-            self.slots = Some(Self::node_slots(model, pattern, &self.nodes));
-        }
         let nb = self.bodies.len();
-        for (i, (f, _, ev)) in out.iter().enumerate() {
+        for (i, (f, kk, ev)) in out.iter().enumerate() {
             let a = self.nodes[i];
             // A Newton step that carries a free node from above a body to below its surface
             // (mid-surface through the body) would be answered by a huge penalty force and
@@ -312,19 +288,11 @@ impl Contribution for ContactSet {
             // state so the step is shortened instead.
             let through = self.reject_through && ev.iter().any(|e| e.active && -e.gap > self.offset[i]);
             for k in 0..3 {
-                f_int[NODE_DOFS * a + k] += if through { f64::NAN } else { f[k] };
+                f_ext[NODE_DOFS * a + k] -= if through { f64::NAN } else { f[k] };
             }
             self.last[i * nb..(i + 1) * nb].copy_from_slice(ev);
-        }
-        if let (Some(v), Some(slots)) = (values, self.slots.as_ref()) {
-            for (i, (_, kk, _)) in out.iter().enumerate() {
-                for r in 0..3 {
-                    for c in r..3 {
-                        if let Some(s) = slots[i][3 * r + c] {
-                            v[s] += kk[(r, c)];
-                        }
-                    }
-                }
+            if ev.iter().any(|e| e.active) {
+                jacobian.push((a, -kk));
             }
         }
     }

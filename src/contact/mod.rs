@@ -1,5 +1,5 @@
-//! Contact of shell nodes with rigid bodies (parry3d), viscous drape stabilization and drape
-//! measures.
+//! Contact of shell nodes with rigid bodies (parry3d), viscous stabilization for static steps
+//! and drape measures.
 
 pub mod body;
 pub mod drape;
@@ -15,7 +15,7 @@ use parry3d_f64::shape::{Ball, Capsule, Cuboid, Cylinder};
 
 pub use body::{Proximity, RigidBody, Shape};
 pub use mechanics::{ContactIncrement, ContactSet, ContactSettings};
-pub use stabilize::{Inertia, Stabilization};
+pub use stabilize::Stabilization;
 
 use crate::model::PartInfo;
 use crate::scene::{ContactSpec, Locator, SceneError, ShapeSpec};
@@ -31,8 +31,6 @@ pub struct ContactSetup {
     pub settings: ContactSettings,
     /// Viscous stabilization coefficient (N/m³), if any.
     pub stabilization: Option<f64>,
-    /// Pseudo-dynamics: (time step s, damping 1/s, fallback areal density kg/m²).
-    pub dynamics: Option<(f64, f64, f64)>,
     /// Warnings from mesh repair (file: what was repaired).
     pub warnings: Vec<String>,
 }
@@ -128,23 +126,7 @@ pub fn build_contact(spec: &ContactSpec, loc: &Locator, base_dir: &Path, parts: 
     if spec.stabilization.is_some_and(|c| !pos(c)) {
         return Err(loc.at(None, Some("stabilization"), "contact.stabilization", "expected a positive stabilization coefficient (N/m³)"));
     }
-    let dynamics = match &spec.dynamics {
-        None => None,
-        Some(d) => {
-            if !pos(d.time_step) {
-                return Err(loc.at(None, Some("time_step"), "contact.dynamics.time_step", "expected a positive time step (s)"));
-            }
-            if !(d.damping.is_finite() && d.damping >= 0.0) {
-                return Err(loc.at(None, Some("damping"), "contact.dynamics.damping", "expected a non-negative damping (1/s)"));
-            }
-            if d.areal_density.is_some_and(|r| !pos(r)) {
-                return Err(loc.at(None, Some("areal_density"), "contact.dynamics.areal_density", "expected a positive areal density"));
-            }
-            Some((d.time_step, d.damping, d.areal_density.unwrap_or(f64::NAN)))
-        }
-    };
     Ok(ContactSetup {
-        dynamics,
         bodies,
         parts: part_ids,
         settings: ContactSettings { penalty_factor: spec.penalty_factor, penalty: spec.penalty, tangential_factor: spec.tangential_factor },
@@ -153,14 +135,12 @@ pub fn build_contact(spec: &ContactSpec, loc: &Locator, base_dir: &Path, parts: 
     })
 }
 
-/// Adds the contact, stabilization and pseudo-dynamics terms of `setup` to `solver`.
+/// Adds the contact and stabilization terms of `setup` to `solver` (drape falls and settles
+/// in a `Dynamic` step of the solver, `solver::dynamics`).
 pub fn attach<'m>(solver: &mut crate::solver::Solver<'m>, model: &'m crate::model::Model, setup: &ContactSetup) {
-    solver.add_contribution(Box::new(ContactSet::new(model, setup.bodies.clone(), &setup.parts, &setup.settings)));
+    solver.add_nodal_forces(Box::new(ContactSet::new(model, setup.bodies.clone(), &setup.parts, &setup.settings)));
     if let Some(k) = setup.stabilization {
-        solver.add_contribution(Box::new(Stabilization::new(model, k)));
-    }
-    if let Some((dt, eta, rho)) = setup.dynamics {
-        solver.add_contribution(Box::new(Inertia::new(model, dt, eta, rho)));
+        solver.add_nodal_forces(Box::new(Stabilization::new(model, k)));
     }
 }
 
@@ -190,7 +170,7 @@ pub fn summarize(
     setup: &ContactSetup,
     model: &crate::model::Model,
     state: &crate::model::State,
-    contributions: &[Box<dyn crate::solver::extra::Contribution + '_>],
+    contributions: &[Box<dyn crate::solver::NodalForces + '_>],
     extra: &mut std::collections::BTreeMap<String, serde_json::Value>,
 ) {
     for c in contributions {

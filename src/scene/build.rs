@@ -169,7 +169,9 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
         if !(p.areal_density.is_finite() && p.areal_density >= 0.0) {
             return Err(loc.at(Some(&p.name), Some("areal_density"), format!("{field}.areal_density"), "expected a non-negative mass per area"));
         }
-        let areal_density = if p.areal_density > 0.0 { p.areal_density } else { gravity_density.unwrap_or(0.0) };
+        // Else the material's own (a fabric's areal density).
+        let material_density = sections.last().and_then(|s| s.material.areal_density());
+        let areal_density = if p.areal_density > 0.0 { p.areal_density } else { gravity_density.or(material_density).unwrap_or(0.0) };
         parts.push(PartInfo { name: p.name.clone(), first_node, n_nodes: m.nodes.len(), first_element, n_elements: m.quads.len(), areal_density });
         meshes.push(m);
     }
@@ -196,7 +198,8 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
                 LoadSpec::Gravity { part, areal_density, .. } if *part == gp.name => Some(*areal_density),
                 _ => None,
             });
-            let areal_density = if gp.areal_density > 0.0 { gp.areal_density } else { gravity_density.unwrap_or(0.0) };
+            let material_density = sections.last().and_then(|s| s.material.areal_density());
+            let areal_density = if gp.areal_density > 0.0 { gp.areal_density } else { gravity_density.or(material_density).unwrap_or(0.0) };
             parts.push(PartInfo { name: gp.name.clone(), first_node, n_nodes: gp.mesh.nodes.len(), first_element, n_elements: gp.mesh.quads.len(), areal_density });
             garment_first_node.push(first_node);
             meshes.push(gp.mesh.clone());

@@ -122,23 +122,6 @@ pub struct ContactSpec {
     /// Viscous pseudo-time stabilization coefficient c (N/m³): force c·a·(u − u_prev).
     #[serde(default)]
     pub stabilization: Option<f64>,
-    /// Damped implicit pseudo-dynamics (one backward-Euler time step per increment).
-    #[serde(default)]
-    pub dynamics: Option<DrapeDynamicsSpec>,
-}
-
-/// Lumped-mass backward-Euler pseudo-dynamics of the contact module.
-#[derive(Clone, Debug, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct DrapeDynamicsSpec {
-    /// Time step per increment (s).
-    pub time_step: f64,
-    /// Mass-proportional damping (1/s).
-    #[serde(default)]
-    pub damping: f64,
-    /// Areal density (kg/m²) for parts whose material has none.
-    #[serde(default)]
-    pub areal_density: Option<f64>,
 }
 
 fn one() -> f64 {

@@ -222,6 +222,7 @@ impl<'m> Solver<'m> {
                     let frac = inc as f64 / n_inc as f64;
                     let outcome = loop {
                         let mut report = |it: usize, res: f64| progress(&Progress { step: si, fraction: frac, iteration: it, residual: res });
+                        self.begin_nodal_increment(dl / length);
                         let attempt = self.path_increment(state, start, &step.target_scales, lambda, Constraint::Arc { length: dl }, prev_du.as_deref(), &mask, &mut report);
                         match attempt {
                             (PathAttempt::Converged { iterations: its, residuals, energy, indefinite }, dlam, du) => {
@@ -246,6 +247,7 @@ impl<'m> Solver<'m> {
                         }
                     };
                     let (its, residuals, energy, indefinite, dlam, du) = outcome?;
+                    self.commit_nodal_forces(state);
                     lambda += dlam;
                     let scales = scales_at(lambda);
                     let (negative_pivots, stiffness_parameter, stability_event) = self.stability_at(state, start, &step.target_scales, tracker);
@@ -265,6 +267,7 @@ impl<'m> Solver<'m> {
                         negative_pivots,
                         stiffness_parameter,
                         stability_event,
+                        extra: std::mem::take(&mut self.extra_reports),
                         ..Default::default()
                     };
                     on_increment(&report, state, self);
@@ -295,10 +298,12 @@ impl<'m> Solver<'m> {
                         let saved = state.clone();
                         let mut report = |it: usize, res: f64| progress(&Progress { step: si, fraction: next, iteration: it, residual: res });
                         let c = Constraint::Displacement { eq, delta: (next - tau) * value };
+                        self.begin_nodal_increment((next - tau) * n_inc as f64);
                         match self.path_increment(state, start, &step.target_scales, lambda, c, prev_du.as_deref(), &mask, &mut report) {
                             (PathAttempt::Converged { iterations: its, residuals, energy, indefinite: ind }, dlam, du) => {
                                 iterations += its;
                                 indefinite |= ind;
+                                self.commit_nodal_forces(state);
                                 lambda += dlam;
                                 tau = next;
                                 prev_du = Some(du);
@@ -326,6 +331,7 @@ impl<'m> Solver<'m> {
                                         negative_pivots,
                                         stiffness_parameter,
                                         stability_event,
+                                        extra: std::mem::take(&mut self.extra_reports),
                                         ..Default::default()
                                     };
                                     on_increment(&report, state, self);

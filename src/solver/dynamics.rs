@@ -585,10 +585,12 @@ impl<'m> Solver<'m> {
             };
             // Predictor: constant velocity would overshoot at rest; start from the last state.
             *state = prev.state.clone();
+            self.begin_nodal_increment(dt / ds.dt);
             let outcome = self.time_step(state, &prev, &mass, dt, ds, &scales, &mut report_progress);
             match outcome {
                 TimeStep::Converged { iterations: its, residuals, static_residual, energy, static_r } => {
                     iterations += its;
+                    self.commit_nodal_forces(state);
                     let co = Coefficients::new(&ds.scheme, dt, ds.mass_damping);
                     let mut ke = 0.0;
                     let (mut v, mut a, mut w, mut wa) = (prev.v.clone(), prev.a.clone(), prev.w.clone(), prev.wa.clone());
@@ -620,6 +622,7 @@ impl<'m> Solver<'m> {
                         indefinite_tangent: indefinite,
                         energy,
                         dynamics: Some(DynamicInfo { time: t, dt, kinetic_energy: ke, static_residual, at_rest, end_of_step, rejected, unstable_rests }),
+                        extra: std::mem::take(&mut self.extra_reports),
                         ..Default::default()
                     };
                     on_increment(&report, state, self);

@@ -5,7 +5,6 @@ pub mod damped;
 pub mod diagnose;
 pub mod dynamics;
 pub mod eigen;
-pub mod extra;
 pub mod imperfection;
 pub mod linear;
 pub mod newton;

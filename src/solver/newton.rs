@@ -174,14 +174,15 @@ pub struct Solver<'m> {
     pub(super) values: Vec<f64>,
     pub(super) f_int: Vec<f64>,
     pub(super) f_ext: Vec<f64>,
-    /// Configuration-dependent nodal forces (contact), if any.
-    pub(super) nodal_forces: Option<Box<dyn super::NodalForces + 'm>>,
+    /// Configuration-dependent nodal forces (contact, stabilization, springs).
+    pub(super) nodal_forces: Vec<Box<dyn super::NodalForces + 'm>>,
     /// Accumulated wall-time split.
     pub timings: Timings,
-    /// Extra force/tangent terms added after element assembly.
-    extras: Vec<Box<dyn super::extra::Contribution + 'm>>,
-    /// Reports of the extras since the last nominal increment.
-    extra_reports: Vec<serde_json::Value>,
+    /// ‖nodal forces‖ of the last assembly (all DOFs): part of the residual's reference, as
+    /// contact can carry the whole load of an otherwise unsupported body.
+    pub(super) nodal_norm: f64,
+    /// Reports of the nodal-force terms since the last reported increment.
+    pub(super) extra_reports: Vec<serde_json::Value>,
 }
 
 impl<'m> Solver<'m> {
@@ -201,26 +202,39 @@ impl<'m> Solver<'m> {
             cholesky,
             f_int: vec![0.0; ndof],
             f_ext: vec![0.0; ndof],
-            nodal_forces: None,
+            nodal_forces: Vec::new(),
+            nodal_norm: 0.0,
             timings,
-            extras: Vec::new(),
             extra_reports: Vec::new(),
         })
     }
 
-    /// Adds a force/tangent contribution (contact, stabilization) to every assembly.
-    pub fn add_contribution(&mut self, c: Box<dyn super::extra::Contribution + 'm>) {
-        self.extras.push(c);
+    /// Adds configuration-dependent nodal forces (contact, stabilization, springs) to every
+    /// later assembly.
+    pub fn add_nodal_forces(&mut self, forces: Box<dyn super::NodalForces + 'm>) {
+        self.nodal_forces.push(forces);
     }
 
-    /// The extra contributions.
-    pub fn contributions(&self) -> &[Box<dyn super::extra::Contribution + 'm>] {
-        &self.extras
+    /// The configuration-dependent nodal-force terms.
+    pub fn nodal_forces(&self) -> &[Box<dyn super::NodalForces + 'm>] {
+        &self.nodal_forces
     }
 
-    /// Adds configuration-dependent nodal forces (e.g. contact) to every later assembly.
-    pub fn set_nodal_forces(&mut self, forces: Box<dyn super::NodalForces + 'm>) {
-        self.nodal_forces = Some(forces);
+    /// Tells the nodal-force terms that an attempt of relative size `fraction` begins.
+    pub(super) fn begin_nodal_increment(&mut self, fraction: f64) {
+        for c in self.nodal_forces.iter_mut() {
+            c.begin_increment(fraction);
+        }
+    }
+
+    /// Tells the nodal-force terms that `state` has converged; keeps their reports for the
+    /// next increment report.
+    pub(super) fn commit_nodal_forces(&mut self, state: &State) {
+        for c in self.nodal_forces.iter_mut() {
+            if let Some(r) = c.commit(self.model, state) {
+                self.extra_reports.push(r);
+            }
+        }
     }
 
     /// Equations, stored tangent entries (upper triangle) and factor entries.
@@ -247,7 +261,7 @@ impl<'m> Solver<'m> {
                 fe += self.f_ext[g] * self.f_ext[g];
             }
         }
-        let reference = fe.sqrt().max(fi.sqrt()).max(1e-300);
+        let reference = fe.sqrt().max(fi.sqrt()).max(self.nodal_norm).max(1e-300);
         (rr.sqrt() / reference, reference)
     }
 
@@ -259,32 +273,26 @@ impl<'m> Solver<'m> {
             if tangent { Some(&mut self.values) } else { None },
         )?;
         self.timings.assembly += info.seconds;
-        if !self.extras.is_empty() {
-            let t = Instant::now();
-            for c in self.extras.iter_mut() {
-                c.add(self.model, state, &self.assembler.pattern, &mut self.f_int, if tangent { Some(&mut self.values) } else { None });
-            }
-            self.timings.contact += t.elapsed().as_secs_f64();
-            self.timings.contact_search = self.extras.iter().map(|c| c.search_seconds()).sum();
-        }
         self.model.external_force(state, scales, &mut self.f_ext);
-        if let Some(forces) = &self.nodal_forces {
+        if !self.nodal_forces.is_empty() {
+            let t = Instant::now();
             let mut jacobian = Vec::new();
-            if self.model.dofs.ties.is_empty() {
-                forces.add(self.model, state, &mut self.f_ext, &mut jacobian);
-            } else {
-                // Forces on tied slaves fold onto their masters like the other loads.
-                let mut f = vec![0.0; self.f_ext.len()];
+            let mut f = vec![0.0; self.f_ext.len()];
+            for forces in self.nodal_forces.iter_mut() {
                 forces.add(self.model, state, &mut f, &mut jacobian);
-                self.model.dofs.fold(&mut f);
-                self.f_ext.iter_mut().zip(&f).for_each(|(e, v)| *e += v);
             }
+            self.nodal_norm = f.iter().map(|v| v * v).sum::<f64>().sqrt();
+            // Forces on tied slaves fold onto their masters like the other loads.
+            self.model.dofs.fold(&mut f);
+            self.f_ext.iter_mut().zip(&f).for_each(|(e, v)| *e += v);
             if tangent {
                 let p = &self.assembler.pattern;
                 for (n, j) in &jacobian {
                     super::nodal::add_node_block(self.model, &p.col_ptr, &p.row_idx, &mut self.values, *n, j);
                 }
             }
+            self.timings.contact += t.elapsed().as_secs_f64();
+            self.timings.contact_search = self.nodal_forces.iter().map(|c| c.search_seconds()).sum();
         }
         Ok(info.energy)
     }
@@ -478,9 +486,7 @@ impl<'m> Solver<'m> {
                     let saved = state.clone();
                     let frac = (done_before as f64 + next * n_inc as f64) / total as f64;
                     let mut report_progress = |it: usize, res: f64| progress(&Progress { step: si, fraction: frac, iteration: it, residual: res });
-                    for c in self.extras.iter_mut() {
-                        c.begin_increment((next - tau) * n_inc as f64);
-                    }
+                    self.begin_nodal_increment((next - tau) * n_inc as f64);
                     let outcome = match step.kind {
                         StepKind::StaticDamped => self.attempt_damped(state, &trial_scales, &mut report_progress),
                         _ => self.attempt(state, &trial_scales, step.linear, &mut report_progress),
@@ -491,11 +497,7 @@ impl<'m> Solver<'m> {
                             indefinite |= ind;
                             tau = next;
                             scales = trial_scales;
-                            for c in self.extras.iter_mut() {
-                                if let Some(r) = c.commit(self.model, state) {
-                                    self.extra_reports.push(r);
-                                }
-                            }
+                            self.commit_nodal_forces(state);
                             if its <= 6 && cutback_level > 0 {
                                 cutback_level -= 1;
                                 dtau *= 2.0;
