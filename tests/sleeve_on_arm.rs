@@ -87,7 +87,7 @@ fn sleeve_rests_on_the_arm_without_penetrating_it_and_stays_sewn() {
     assert!(worst < 1e-6 * size, "seam gap {worst}");
 
     // At rest: kinetic energy a small fraction of its peak, the arm carries the weight.
-    let ke: Vec<f64> = reports.iter().map(|r| report(r, "dynamics")["kinetic_energy"].as_f64().expect("kinetic energy")).collect();
+    let ke: Vec<f64> = reports.iter().map(|r| r.dynamics.as_ref().expect("a Dynamic step report").kinetic_energy).collect();
     let peak = ke.iter().copied().fold(0.0, f64::max);
     let last = *ke.last().expect("increments");
     let contact = report(reports.last().expect("increments"), "contact");
