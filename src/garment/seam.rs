@@ -192,7 +192,7 @@ pub fn seam_ties(
                 Some(l) => (-gap0[k], Some(l)),
                 None => (0.0, None),
             };
-            ties.push(Tie { slave: NODE_DOFS * s + k, masters: w.iter().map(|&(m, c)| (NODE_DOFS * m + k, c)).collect(), offset, load });
+            ties.push(Tie { slave: NODE_DOFS * s + k, masters: w.iter().map(|&(m, c)| (NODE_DOFS * m + k, c)).collect(), offset, load, links: Vec::new() });
         }
         if kind.ties_rotations() {
             // Coincident with a single master: share its frame so the tilts are the same.
@@ -212,7 +212,7 @@ pub fn seam_ties(
                         }
                     }
                 }
-                ties.push(Tie { slave: NODE_DOFS * s + 3 + k, masters, offset: 0.0, load: None });
+                ties.push(Tie { slave: NODE_DOFS * s + 3 + k, masters, offset: 0.0, load: None, links: Vec::new() });
             }
         }
     }
@@ -228,28 +228,34 @@ pub fn seam_ties(
 }
 
 /// Ties of a rigid link from master node `m` to slave node `s` (e.g. two plies of a stack
-/// joined through the thickness at a stitch): δu_s = δu_m + δθ_m × r with r = x_s − x_m and
-/// the master's rotation δθ = t2 δα1 − t1 δα2 (so that δd = δθ × d = t1 δα1 + t2 δα2), and
-/// the slave director tilted with the master's. The weights use the reference frames: the
-/// link is exact for small rotations of the stack and first-order beyond (its length
-/// drifts by about |r| θ²/2 at a rotation θ).
+/// joined through the thickness at a stitch). The offset r = x_s − x_m splits into Z d_m
+/// along the master's director and a tangential rest r_⊥. The director part is exact at any
+/// rotation: x_s = x_m + Z d_m (a [`Tie`] director term, relinearised at every assembly:
+/// δu_s = δu_m + Z (t1 δα1 + t2 δα2)). A tangential rest (zero for plies offset along a
+/// common director) is linearised about the reference frames, δu_s += δθ_m × r_⊥ with
+/// δθ = t2 δα1 − t1 δα2. The slave director is tilted with the master's: with parallel
+/// directors the slave frame is made equal to the master's, so both stay equal (exact).
 pub fn rigid_link(m: usize, s: usize, x0: &[Vector3<f64>], frames0: &mut [DirectorFrame]) -> Vec<Tie> {
     let r = x0[s] - x0[m];
     if frames0[s].d.dot(&frames0[m].d) > 1.0 - 1e-12 {
         frames0[s] = DirectorFrame::new(frames0[s].d, Some(frames0[m].t1));
     }
     let fm = frames0[m];
-    let (a1, a2) = (fm.t2.cross(&r), -fm.t1.cross(&r));
+    let z = r.dot(&fm.d);
+    let rt = r - fm.d * z;
+    let tangential = rt.norm() > 1e-9 * r.norm();
+    let (a1, a2) = (fm.t2.cross(&rt), -fm.t1.cross(&rt));
     let mut ties = Vec::with_capacity(5);
     for k in 0..3 {
         let mut masters = vec![(NODE_DOFS * m + k, 1.0)];
-        if a1[k].abs() > 1e-15 * r.norm() {
+        if tangential && a1[k].abs() > 1e-15 * r.norm() {
             masters.push((NODE_DOFS * m + 3, a1[k]));
         }
-        if a2[k].abs() > 1e-15 * r.norm() {
+        if tangential && a2[k].abs() > 1e-15 * r.norm() {
             masters.push((NODE_DOFS * m + 4, a2[k]));
         }
-        ties.push(Tie { slave: NODE_DOFS * s + k, masters, offset: 0.0, load: None });
+        let links = if z != 0.0 { vec![(m, z)] } else { Vec::new() };
+        ties.push(Tie { slave: NODE_DOFS * s + k, masters, offset: 0.0, load: None, links });
     }
     let fs = frames0[s];
     for (k, tk) in [fs.t1, fs.t2].iter().enumerate() {
@@ -259,7 +265,7 @@ pub fn rigid_link(m: usize, s: usize, x0: &[Vector3<f64>], frames0: &mut [Direct
             .map(|(l, tl)| (NODE_DOFS * m + 3 + l, tk.dot(tl)))
             .filter(|&(_, c)| c.abs() > 1e-14)
             .collect();
-        ties.push(Tie { slave: NODE_DOFS * s + 3 + k, masters, offset: 0.0, load: None });
+        ties.push(Tie { slave: NODE_DOFS * s + 3 + k, masters, offset: 0.0, load: None, links: Vec::new() });
     }
     ties
 }
