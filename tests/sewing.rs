@@ -51,3 +51,107 @@ fn sewn_sleeve_hangs_under_gravity() {
     println!("{} increments, {} Newton iterations, {:.2} s", summary.increments.len(), summary.newton_iterations, summary.wall_s);
     assert_eq!(summary.increments.len(), 14);
 }
+
+/// Three-ply sleeve (outer shell, carbon layer, liner of `garments/nbc_sleeve.ron`) cut as one
+/// panel of width W = 2π·0.057 m and placed open, rolled onto a cylinder of radius `radius`
+/// (the rest of the circle is the gap, centred on +x), sewn shut by its plain underarm seam
+/// through all plies over `increments` static increments.
+fn three_ply_sleeve(radius: f64, increments: usize) -> String {
+    let w = 0.3581415625_f64;
+    let gap_deg = 360.0 - (w / radius).to_degrees();
+    format!(
+        r#"Scene(
+    name: "nbc_sleeve_sewing",
+    materials: {{
+        "nylon_cotton": StVenantKirchhoff(young: 8.0e6, poisson: 0.3),
+        "carbon_felt": StVenantKirchhoff(young: 1.0e6, poisson: 0.2),
+        "liner_knit": StVenantKirchhoff(young: 2.0e6, poisson: 0.3),
+    }},
+    parts: [],
+    garment: Some((
+        element_size: 0.02,
+        plies: {{
+            "outer": (material: "nylon_cotton", thickness: 0.0004),
+            "carbon": (material: "carbon_felt", thickness: 0.0015),
+            "liner": (material: "liner_knit", thickness: 0.0003),
+        }},
+        panels: [(
+            name: "sleeve",
+            outline: [(0.0, 0.0), ({w}, 0.0), ({w}, 0.40), (0.0, 0.40)],
+            edges: {{"cuff": (from: 0, to: 1), "front": (from: 1, to: 2), "armhole": (from: 2, to: 3), "back": (from: 3, to: 0)}},
+            plies: ["outer", "carbon", "liner"],
+            placement: Cylinder(origin: (0.0, 0.0, 0.0), axis: (0.0, 0.0, 1.0), radius: {radius}, start_angle_deg: {start}),
+        )],
+        seams: [(name: "underarm", a: (panel: "sleeve", edge: "front"), b: (panel: "sleeve", edge: "back", reversed: true),
+                 kind: Plain, allowance: 0.01, closing: Some("sew"))],
+        stitch_lines: [
+            (name: "quilt_low", panel: "sleeve", points: [(0.0, 0.1), ({w}, 0.1)]),
+            (name: "quilt_mid", panel: "sleeve", points: [(0.0, 0.2), ({w}, 0.2)]),
+            (name: "quilt_high", panel: "sleeve", points: [(0.0, 0.3), ({w}, 0.3)]),
+        ],
+    )),
+    node_sets: {{
+        "armhole": Edge(part: "sleeve/outer", edge: "armhole"),
+        "anchor": Nearest(point: ({ax}, 0.0, 0.40), part: Some("sleeve/outer")),
+        "cuff_mid": Nearest(point: ({ax}, 0.0, 0.0), part: Some("sleeve/outer")),
+    }},
+    boundary: [Fix(set: "armhole", dofs: [Uz]), Fix(set: "anchor", dofs: [Ux, Uy]), Fix(set: "cuff_mid", dofs: [Uy])],
+    loads: {{"sew": Closure}},
+    steps: [(name: "sew", increments: {increments}, scale: {{"sew": 1.0}})],
+    output: (vtu: false),
+)"#,
+        start = 0.5 * gap_deg,
+        ax = -radius,
+    )
+}
+
+/// Multi-ply virtual sewing: all three plies of both spans are driven together and end tied
+/// ply to ply, the stack keeping its thickness offsets through the seam (exact rigid links).
+/// Reference as above: each ply's gap must fall to round-off (bound 1e-6 of the panel size);
+/// the closed sleeve's middle ply (the carbon layer) has circumference W, so its mean radius
+/// approaches W/(2π) (0.5 %), and the link offsets through the seam stay at the ply spacings
+/// (1 % of the link length).
+#[test]
+fn sewing_closes_a_three_ply_sleeve() {
+    let radius = 0.0684; // the panel starts open by 60° of the circle
+    let text = three_ply_sleeve(radius, 10);
+    let sc = scene::parse("nbc_sleeve_sewing.ron", &text).unwrap_or_else(|e| panic!("{e}"));
+    let built = scene::build(&sc, "nbc_sleeve_sewing.ron", &text).unwrap_or_else(|e| panic!("{e}"));
+    let model = &built.model;
+    assert_eq!(built.seams.len(), 3, "one seam row per ply");
+    let size = 0.40_f64.max(0.3581415625);
+    let mut solver = Solver::new(model, sc.solver.clone()).expect("solver");
+    let mut state = model.initial_state();
+    let t = std::time::Instant::now();
+    let mut iterations = 0;
+    solver.run(&built.steps, &mut state, &mut |rep, _, _| iterations += rep.iterations, &mut |_| {}).unwrap_or_else(|e| panic!("{e}"));
+    let secs = t.elapsed().as_secs_f64();
+    for seam in &built.seams {
+        let gap0 = seam.gaps(|n| model.x0[n]).into_iter().fold(0.0, f64::max);
+        let worst = seam.gaps(|n| model.position(&state, n)).into_iter().fold(0.0, f64::max);
+        println!("{}: initial gap {gap0:.4e} m, final worst gap {worst:.3e} m ({:.2e} of the panel size)", seam.name, worst / size);
+        assert!(gap0 > 0.06, "initial gap {gap0}");
+        assert!(worst < 1e-6 * size, "{}: {worst}", seam.name);
+    }
+    // Ply offsets through the seam: outer ply row vs carbon and liner rows.
+    let rows: Vec<&Vec<usize>> = built.seams.iter().map(|s| &s.master).collect();
+    let spacing = [0.5 * (0.0004 + 0.0015), 0.5 * 0.0004 + 0.0015 + 0.5 * 0.0003];
+    let mut worst_offset = 0.0_f64;
+    for (k, z) in spacing.iter().enumerate() {
+        for (&a, &b) in rows[0].iter().zip(rows[k + 1]) {
+            let r = (model.position(&state, b) - model.position(&state, a)).norm();
+            worst_offset = worst_offset.max((r - z).abs() / z);
+        }
+    }
+    let carbon = model.parts.iter().find(|p| p.name == "sleeve/carbon").expect("carbon ply");
+    let ring: Vec<usize> = (carbon.first_node..carbon.first_node + carbon.n_nodes).filter(|&n| (model.x0[n].z - 0.2).abs() < 1e-9).collect();
+    let c = ring.iter().map(|&n| model.position(&state, n)).sum::<nalgebra::Vector3<f64>>() / ring.len() as f64;
+    let r_mean = ring.iter().map(|&n| { let p = model.position(&state, n) - c; p.x.hypot(p.y) }).sum::<f64>() / ring.len() as f64;
+    let r_expect = 0.3581415625 / (2.0 * std::f64::consts::PI);
+    println!(
+        "nodes {} equations {} tied DOFs {}; {iterations} Newton iterations, {secs:.2} s; ply offsets at the seam within {:.2e} of the spacing; carbon-ply radius {r_mean:.6} vs W/2π {r_expect:.6}",
+        model.n_nodes(), model.dofs.n_free, model.dofs.ties.len(), worst_offset
+    );
+    assert!(worst_offset < 0.01, "{worst_offset}");
+    assert!((r_mean - r_expect).abs() < 5e-3 * r_expect, "{r_mean}");
+}

@@ -66,6 +66,9 @@ pub struct Assembler {
     /// (local entry i·20+j, slot, w_i w_j), the element's part of Tᵀ K T. Empty for
     /// elements without tied DOFs (their entries all take the direct path).
     tied: Vec<Vec<(u16, u32, f64)>>,
+    /// Elements with a DOF tied by a rigid link (state-dependent weights): their Tᵀ K T
+    /// entries are expanded at every assembly instead of through `tied`.
+    linked: Vec<bool>,
 }
 
 
@@ -162,11 +165,19 @@ impl Assembler {
             let rows = &pattern.row_idx[pattern.col_ptr[c]..pattern.col_ptr[c + 1]];
             rows.binary_search(&r).ok().map(|p| (pattern.col_ptr[c] + p) as u32)
         };
+        let is_linked = |el: &crate::model::ElementDef| {
+            el.nodes.iter().any(|&n| (0..NODE_DOFS).any(|k| {
+                let t = model.dofs.tie_of[NODE_DOFS * n + k];
+                t != UNTIED && model.dofs.has_links(t as usize)
+            }))
+        };
+        let linked: Vec<bool> = model.elements.iter().map(|el| is_tied(el) && is_linked(el)).collect();
         let tied = model
             .elements
             .iter()
-            .map(|el| {
-                if !is_tied(el) {
+            .zip(&linked)
+            .map(|(el, &lk)| {
+                if !is_tied(el) || lk {
                     return Vec::new();
                 }
                 let globals: [usize; ELEMENT_DOFS] = std::array::from_fn(|i| NODE_DOFS * el.nodes[i / NODE_DOFS] + i % NODE_DOFS);
@@ -200,7 +211,38 @@ impl Assembler {
                 Err(f) => Err(f.clone()),
             })
             .collect();
-        Self { pattern, slots, rules, geometry, tied }
+        Self { pattern, slots, rules, geometry, tied, linked }
+    }
+
+    /// Scatters the tied part of element `e`'s stiffness `k` through the current
+    /// (state-dependent) weights of its rigid-link ties: Tᵀ K T for the entries not taken
+    /// by the direct path.
+    fn scatter_linked(&self, model: &Model, e: usize, k: &nalgebra::SMatrix<f64, ELEMENT_DOFS, ELEMENT_DOFS>, v: &mut [f64]) {
+        let nodes = model.elements[e].nodes;
+        let globals: [usize; ELEMENT_DOFS] = std::array::from_fn(|i| NODE_DOFS * nodes[i / NODE_DOFS] + i % NODE_DOFS);
+        let exp: Vec<Vec<(usize, f64)>> = globals.iter().map(|&g| model.dofs.expand(g)).collect();
+        let p = &self.pattern;
+        for i in 0..ELEMENT_DOFS {
+            for j in 0..ELEMENT_DOFS {
+                if model.dofs.tie_of[globals[i]] == UNTIED && model.dofs.tie_of[globals[j]] == UNTIED {
+                    continue;
+                }
+                let kij = k[(i, j)];
+                if kij == 0.0 {
+                    continue;
+                }
+                for &(r, wr) in &exp[i] {
+                    for &(c, wc) in &exp[j] {
+                        if r <= c {
+                            let rows = &p.row_idx[p.col_ptr[c]..p.col_ptr[c + 1]];
+                            if let Ok(q) = rows.binary_search(&r) {
+                                v[p.col_ptr[c] + q] += wr * wc * kij;
+                            }
+                        }
+                    }
+                }
+            }
+        }
     }
 
     /// Number of stored entries of the upper triangle.
@@ -218,6 +260,7 @@ impl Assembler {
         mut values: Option<&mut [f64]>,
     ) -> Result<AssemblyInfo, AssemblyFailure> {
         let t0 = Instant::now();
+        model.dofs.refresh_links(&state.frames);
         let with_tangent = values.is_some();
         f_int.iter_mut().for_each(|v| *v = 0.0);
         if let Some(v) = values.as_deref_mut() {
@@ -259,6 +302,9 @@ impl Assembler {
                     for &(ij, s, w) in &self.tied[e] {
                         let ij = ij as usize;
                         v[s as usize] += w * k[(ij / ELEMENT_DOFS, ij % ELEMENT_DOFS)];
+                    }
+                    if self.linked[e] {
+                        self.scatter_linked(model, e, k, v);
                     }
                 }
             }

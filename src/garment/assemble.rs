@@ -132,7 +132,7 @@ impl GarmentMesh {
                 return Err(loc.at(Some(&p.name), Some("grain"), format!("{field}.grain"), "expected a non-zero grain direction"));
             }
             let (outline, ranges) = sampled_outline(p, h).map_err(|e| loc.at(Some(&p.name), Some("curves"), format!("{field}.curves"), format!("panel \"{}\": {e}", p.name)))?;
-            let pattern = mesh_polygon(&outline, h, &matching_counts(spec, pi, h)).map_err(|e| loc.at(Some(&p.name), Some("outline"), format!("{field}.outline"), format!("panel \"{}\": {e}", p.name)))?;
+            let pattern = mesh_polygon(&outline, h, &matching_counts(spec, pi, h), p.grain).map_err(|e| loc.at(Some(&p.name), Some("outline"), format!("{field}.outline"), format!("panel \"{}\": {e}", p.name)))?;
             let fd = 1e-6 * h;
             let mid: Vec<Vector3<f64>> = pattern.uv.iter().map(|&q| p.placement.map(q)).collect();
             let dirs: Vec<Vector3<f64>> = pattern.uv.iter().map(|&q| p.placement.director(q, fd)).collect();
@@ -181,7 +181,11 @@ impl GarmentMesh {
     /// Seam and stitch-line ties. `first_node[k]` is the first global node of garment part k.
     /// Each seam ties ply k of panel b to ply k of panel a (or a's innermost ply) with the
     /// seam's kind and closing load, and links a's plies 1.. rigidly to its ply 0 along the
-    /// span (all plies sewn together). A stitch line links every node of plies 1.. within
+    /// span (all plies sewn together; the links keep the stack's thickness offsets along ply
+    /// 0's current director, exactly at any rotation). Sewing a multi-ply seam therefore
+    /// drives every ply of b to its partner ply of a together: the resolved tie of ply k of
+    /// b is u = u_a0 + Z_k (d_a0 − d_a0⁰) − g_k⁰ λ, which closes each ply's own initial gap
+    /// g_k⁰ at λ = 1. One [`SeamInfo`] per ply of b (named `seam/ply` for multi-ply panels). A stitch line links every node of plies 1.. within
     /// half an element of the line rigidly to the node of ply 0 at the same pattern point
     /// ([`rigid_link`]: the stack's section stays straight there).
     #[allow(clippy::too_many_arguments)]
@@ -209,12 +213,6 @@ impl GarmentMesh {
                     loc.at_value(&s.name, l, format!("{field}.closing"), format!("no load pattern named \"{l}\" (declare it as `\"{l}\": Closure` in loads)"))
                 })?),
             };
-            if closing.is_some() && (spec.panels[pa].plies.len() > 1 || spec.panels[pb].plies.len() > 1) {
-                return Err(loc.at(Some(&s.name), Some("closing"), format!("{field}.closing"), format!(
-                    "seam \"{}\": sewing (closing) a seam of multi-ply panels is not supported yet; place the panels with the spans together",
-                    s.name
-                )));
-            }
             let row_a = span_row(&self.patterns[pa], &self.sample_ranges[pa], &spec.panels[pa], &s.a);
             let row_b = span_row(&self.patterns[pb], &self.sample_ranges[pb], &spec.panels[pb], &s.b);
             let global = |part: usize, row: &[usize]| -> Vec<usize> { row.iter().map(|n| n + first_node[part]).collect() };
@@ -231,11 +229,10 @@ impl GarmentMesh {
             for k in 0..nb {
                 let part_b = self.part_of(pb, k).ok_or_else(|| err("missing ply".into()))?;
                 let part_a = self.part_of(pa, k.min(na - 1)).ok_or_else(|| err("missing ply".into()))?;
-                let (t, info) = seam_ties(&s.name, s.kind, x0, frames0, &global(part_a, &row_a), &global(part_b, &row_b), closing).map_err(err)?;
+                let name = if nb == 1 { s.name.clone() } else { format!("{}/{}", s.name, spec.panels[pb].plies[k]) };
+                let (t, info) = seam_ties(&name, s.kind, x0, frames0, &global(part_a, &row_a), &global(part_b, &row_b), closing).map_err(err)?;
                 ties.extend(t);
-                if k == 0 {
-                    infos.push(info);
-                }
+                infos.push(info);
             }
         }
         for l in &spec.stitch_lines {

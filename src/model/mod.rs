@@ -69,7 +69,14 @@ pub const UNTIED: u32 = u32::MAX;
 /// drives a seam gap closed) or 0. Eliminated by the master–slave transformation u = T û
 /// (Cook et al. 2002, §9.2; Felippa, IFEM ch. 8): K̂ = Tᵀ K T, f̂ = Tᵀ f, so the reduced
 /// system stays symmetric positive definite without multipliers.
-#[derive(Clone, Debug)]
+///
+/// A translation tie may also carry director terms (`links`, exact rigid links through the
+/// thickness): u_s,k = Σ_m w_m u_m,k + Σ_(n,Z) Z (d_n − d_n⁰)_k + c·λ, i.e. the slave sits at
+/// the offset Z along master node n's current director — exact at any rotation. Its
+/// linearisation δu_s,k = … + Z (t1,k δα1 + t2,k δα2) is refreshed from the current frames at
+/// every assembly, with the consistent second-order term −Z (r_s·d_n) I₂ on n's tilts
+/// (r_s: the slave's tie force), so the reduced tangent stays symmetric.
+#[derive(Clone, Debug, Default)]
 pub struct Tie {
     /// Global DOF (5 n + k) of the slave.
     pub slave: usize,
@@ -79,6 +86,44 @@ pub struct Tie {
     pub offset: f64,
     /// Load pattern scaling the offset.
     pub load: Option<usize>,
+    /// Director terms (master node n, offset Z along its director) of a translation tie.
+    pub links: Vec<(usize, f64)>,
+}
+
+/// Current frames (t1, t2, d) of the nodes whose directors carry rigid-link offsets
+/// ([`Tie::links`]), refreshed from the state at every assembly: the linearisation point of
+/// the state-dependent tie weights. Interior mutability so that a solver holding `&Model`
+/// can relinearise.
+#[derive(Debug, Default)]
+pub struct LinkFrames(std::sync::RwLock<Vec<[Vector3<f64>; 3]>>);
+
+impl Clone for LinkFrames {
+    fn clone(&self) -> Self {
+        Self(std::sync::RwLock::new(self.get()))
+    }
+}
+
+impl LinkFrames {
+    fn get(&self) -> Vec<[Vector3<f64>; 3]> {
+        match self.0.read() {
+            Ok(g) => g.clone(),
+            Err(p) => p.into_inner().clone(),
+        }
+    }
+
+    fn with<R>(&self, f: impl FnOnce(&[[Vector3<f64>; 3]]) -> R) -> R {
+        match self.0.read() {
+            Ok(g) => f(&g),
+            Err(p) => f(&p.into_inner()),
+        }
+    }
+
+    fn set(&self, v: Vec<[Vector3<f64>; 3]>) {
+        match self.0.write() {
+            Ok(mut g) => *g = v,
+            Err(p) => *p.into_inner() = v,
+        }
+    }
 }
 
 /// Numbering of the free DOFs.
@@ -94,6 +139,14 @@ pub struct DofMap {
     pub tie_of: Vec<u32>,
     /// For each tie, its free masters as (equation, weight).
     pub tie_eqs: Vec<Vec<(usize, f64)>>,
+    /// Nodes whose directors carry rigid-link offsets (sorted).
+    pub link_nodes: Vec<usize>,
+    /// For each tie, its director terms as (index into `link_nodes`, offset Z).
+    pub tie_links: Vec<Vec<(usize, f64)>>,
+    /// Ties with director terms.
+    pub link_ties: Vec<usize>,
+    /// Current frames of `link_nodes` (the linearisation point).
+    pub link_frames: LinkFrames,
 }
 
 impl DofMap {
@@ -111,7 +164,17 @@ impl DofMap {
                 }
             })
             .collect();
-        Self { eq, n_free, ties: Vec::new(), tie_of: vec![UNTIED; fixed.len()], tie_eqs: Vec::new() }
+        Self {
+            eq,
+            n_free,
+            ties: Vec::new(),
+            tie_of: vec![UNTIED; fixed.len()],
+            tie_eqs: Vec::new(),
+            link_nodes: Vec::new(),
+            tie_links: Vec::new(),
+            link_ties: Vec::new(),
+            link_frames: LinkFrames::default(),
+        }
     }
 
     /// Numbers every DOF that is neither flagged in `fixed` nor the slave of one of `ties`.
@@ -121,7 +184,7 @@ impl DofMap {
         let n = fixed.len();
         let mut slave_of = vec![UNTIED; n];
         for (i, t) in ties.iter().enumerate() {
-            if t.slave >= n || t.masters.iter().any(|&(m, _)| m >= n) {
+            if t.slave >= n || t.masters.iter().any(|&(m, _)| m >= n) || t.links.iter().any(|&(m, _)| NODE_DOFS * m >= n) {
                 return Err(format!("tie {i} refers to a DOF beyond the model's {n} DOFs"));
             }
             if slave_of[t.slave] != UNTIED {
@@ -155,6 +218,7 @@ impl DofMap {
                             t.offset += w * u.offset;
                         }
                         next.extend(u.masters.iter().map(|&(mm, ww)| (mm, w * ww)));
+                        t.links.extend(u.links.iter().map(|&(nn, z)| (nn, w * z)));
                     }
                 }
                 if next.iter().any(|&(m, _)| m == t.slave) {
@@ -176,11 +240,25 @@ impl DofMap {
                 }
             });
             t.masters.retain(|&(_, w)| w != 0.0);
+            t.links.sort_by_key(|&(m, _)| m);
+            t.links.dedup_by(|b, a| {
+                if a.0 == b.0 {
+                    a.1 += b.1;
+                    true
+                } else {
+                    false
+                }
+            });
+            t.links.retain(|&(_, z)| z != 0.0);
+            if !t.links.is_empty() && t.slave % NODE_DOFS >= 3 {
+                return Err(format!("tie of DOF {} (node {}): director offsets apply to translations only", t.slave, t.slave / NODE_DOFS));
+            }
         }
         let mut kept = Vec::with_capacity(resolved.len());
         for t in resolved {
             if fixed[t.slave] {
-                if t.masters.iter().all(|&(m, _)| fixed[m]) {
+                let link_fixed = t.links.iter().all(|&(m, _)| fixed[NODE_DOFS * m + 3] && fixed[NODE_DOFS * m + 4]);
+                if t.masters.iter().all(|&(m, _)| fixed[m]) && link_fixed {
                     continue;
                 }
                 return Err(format!(
@@ -203,8 +281,91 @@ impl DofMap {
             .iter()
             .map(|t| t.masters.iter().filter(|&&(m, _)| map.eq[m] != FIXED).map(|&(m, w)| (map.eq[m], w)).collect())
             .collect();
+        let mut link_nodes: Vec<usize> = kept.iter().flat_map(|t| t.links.iter().map(|&(m, _)| m)).collect();
+        link_nodes.sort_unstable();
+        link_nodes.dedup();
+        map.tie_links = kept
+            .iter()
+            .map(|t| t.links.iter().filter_map(|&(m, z)| link_nodes.binary_search(&m).ok().map(|i| (i, z))).collect())
+            .collect();
+        map.link_ties = (0..kept.len()).filter(|&i| !kept[i].links.is_empty()).collect();
+        map.link_frames.set(vec![[Vector3::zeros(); 3]; link_nodes.len()]);
+        map.link_nodes = link_nodes;
         map.ties = kept;
         Ok(map)
+    }
+
+    /// Sets the linearisation point of the rigid-link ties to the director frames `frames`
+    /// (called at every assembly).
+    pub fn refresh_links(&self, frames: &[DirectorFrame]) {
+        if self.link_nodes.is_empty() {
+            return;
+        }
+        self.link_frames.set(self.link_nodes.iter().map(|&n| [frames[n].t1, frames[n].t2, frames[n].d]).collect());
+    }
+
+    /// Whether tie `t` has director terms.
+    pub fn has_links(&self, t: usize) -> bool {
+        self.tie_links.get(t).is_some_and(|l| !l.is_empty())
+    }
+
+    /// Current weights of tie `t`'s director terms on global tilt DOFs: for each term
+    /// (n, Z) of a slave component k, (5n+3, Z t1,k) and (5n+4, Z t2,k).
+    fn link_weights(&self, t: usize) -> Vec<(usize, f64)> {
+        let k = self.ties[t].slave % NODE_DOFS;
+        self.link_frames.with(|fr| {
+            let mut out = Vec::with_capacity(2 * self.tie_links[t].len());
+            for &(i, z) in &self.tie_links[t] {
+                let n = self.link_nodes[i];
+                let f = fr.get(i).copied().unwrap_or([Vector3::zeros(); 3]);
+                out.push((NODE_DOFS * n + 3, z * f[0][k]));
+                out.push((NODE_DOFS * n + 4, z * f[1][k]));
+            }
+            out
+        })
+    }
+
+    /// Equations and weights of a global DOF that is not itself the slave of a link tie.
+    fn expand_plain(&self, g: usize, w: f64, out: &mut Vec<(usize, f64)>) {
+        if self.eq[g] != FIXED {
+            out.push((self.eq[g], w));
+        } else if self.tie_of[g] != UNTIED {
+            out.extend(self.tie_eqs[self.tie_of[g] as usize].iter().map(|&(e, v)| (e, w * v)));
+        }
+    }
+
+    /// Adds the consistent second-order term of the rigid-link ties to the reduced tangent
+    /// (upper triangle `values` on `pattern`): for a tie with director term (n, Z) on slave
+    /// component k, ∂²(Z d_n,k)/∂α_a∂α_b = −Z d_n,k δ_ab (exponential map), times the slave's
+    /// tie force r_s = f_int,s − f_ext,s (all-DOF vectors, slave entries kept by folding).
+    pub fn add_link_stiffness(&self, f_int: &[f64], f_ext: &[f64], pattern: &crate::assembly::Pattern, values: &mut [f64]) {
+        if self.link_ties.is_empty() {
+            return;
+        }
+        let mut coef = vec![0.0; self.link_nodes.len()];
+        self.link_frames.with(|fr| {
+            for &t in &self.link_ties {
+                let s = self.ties[t].slave;
+                let k = s % NODE_DOFS;
+                let rs = f_int[s] - f_ext[s];
+                for &(i, z) in &self.tie_links[t] {
+                    if let Some(f) = fr.get(i) {
+                        coef[i] -= z * rs * f[2][k];
+                    }
+                }
+            }
+        });
+        for (i, &c) in coef.iter().enumerate() {
+            if c == 0.0 {
+                continue;
+            }
+            let n = self.link_nodes[i];
+            for l in 0..2 {
+                let mut exp = Vec::new();
+                self.expand_plain(NODE_DOFS * n + 3 + l, 1.0, &mut exp);
+                pattern.add_weighted(values, &exp, c);
+            }
+        }
     }
 
     /// Increment of global DOF `g` from the free-DOF increment `du`: its own entry, the
@@ -219,6 +380,9 @@ impl DofMap {
         if t == UNTIED {
             return None;
         }
+        if self.has_links(t as usize) {
+            return Some(self.expand(g).iter().map(|&(m, w)| w * du[m]).sum());
+        }
         Some(self.tie_eqs[t as usize].iter().map(|&(m, w)| w * du[m]).sum())
     }
 
@@ -230,6 +394,25 @@ impl DofMap {
         }
         match self.tie_of[g] {
             UNTIED => Vec::new(),
+            t if self.has_links(t as usize) => {
+                // Translation masters, then each director term through its node's tilts
+                // (their own equations or their tilt ties), repeated equations merged; zero
+                // weights are kept so that the sparsity pattern covers every rotation.
+                let mut out = self.tie_eqs[t as usize].clone();
+                for (gm, w) in self.link_weights(t as usize) {
+                    self.expand_plain(gm, w, &mut out);
+                }
+                out.sort_by_key(|&(e, _)| e);
+                out.dedup_by(|b, a| {
+                    if a.0 == b.0 {
+                        a.1 += b.1;
+                        true
+                    } else {
+                        false
+                    }
+                });
+                out
+            }
             t => self.tie_eqs[t as usize].clone(),
         }
     }
@@ -237,12 +420,33 @@ impl DofMap {
     /// Folds the generalised forces of tied slaves onto their masters, f_m += w f_s (the
     /// Tᵀ f of the master–slave transformation); slave entries are kept (tie forces).
     pub fn fold(&self, f: &mut [f64]) {
-        for t in &self.ties {
+        for (i, t) in self.ties.iter().enumerate() {
             let fs = f[t.slave];
             for &(m, w) in &t.masters {
                 f[m] += w * fs;
             }
+            if self.has_links(i) {
+                for (gm, w) in self.link_weights(i) {
+                    match self.tie_of[gm] {
+                        UNTIED => f[gm] += w * fs,
+                        j => {
+                            for &(mm, ww) in &self.ties[j as usize].masters {
+                                f[mm] += w * ww * fs;
+                            }
+                        }
+                    }
+                }
+            }
         }
+    }
+
+    /// Director part Σ_(n,Z) Z (d_n − d_n⁰)_k of tie `t` in `state` (0 without links).
+    fn link_displacement(&self, t: usize, state: &State, frames0: &[DirectorFrame]) -> f64 {
+        let k = self.ties[t].slave % NODE_DOFS;
+        self.tie_links[t].iter().map(|&(i, z)| {
+            let n = self.link_nodes[i];
+            z * (state.frames[n].d[k] - frames0[n].d[k])
+        }).sum()
     }
 }
 
@@ -342,12 +546,14 @@ impl Model {
             }
         }
         // Tied slave translations follow their masters (and any moving offset) exactly.
-        for t in &self.dofs.ties {
+        for (i, t) in self.dofs.ties.iter().enumerate() {
             if t.slave % NODE_DOFS >= 3 || t.masters.iter().any(|&(m, _)| m % NODE_DOFS >= 3) {
                 continue;
             }
             let lambda = t.load.and_then(|l| scales.get(l).copied()).unwrap_or(0.0);
-            let v: f64 = t.masters.iter().map(|&(m, w)| w * state.u[m / NODE_DOFS][m % NODE_DOFS]).sum::<f64>() + t.offset * lambda;
+            let v: f64 = t.masters.iter().map(|&(m, w)| w * state.u[m / NODE_DOFS][m % NODE_DOFS]).sum::<f64>()
+                + t.offset * lambda
+                + self.dofs.link_displacement(i, state, &self.frames0);
             state.u[t.slave / NODE_DOFS][t.slave % NODE_DOFS] = v;
         }
     }
@@ -356,6 +562,14 @@ impl Model {
     /// applied with the exponential map).
     pub fn update(&self, state: &mut State, du: &[f64], step: f64) {
         let eq = &self.dofs.eq;
+        // Rigid-link slaves are placed exactly afterwards: keep their moving offset c·λ.
+        let linked: Vec<(usize, f64)> = self
+            .dofs
+            .link_ties
+            .iter()
+            .filter(|&&t| self.dofs.ties[t].masters.iter().all(|&(m, _)| m % NODE_DOFS < 3))
+            .map(|&t| (t, self.link_residue(t, state)))
+            .collect();
         for n in 0..self.n_nodes() {
             let base = NODE_DOFS * n;
             for k in 0..3 {
@@ -371,6 +585,21 @@ impl Model {
                 state.frames[n] = state.frames[n].tilted([a1, a2]);
             }
         }
+        for (t, c) in linked {
+            let s = self.dofs.ties[t].slave;
+            let v = state.u[s / NODE_DOFS][s % NODE_DOFS] - self.link_residue(t, state) + c;
+            state.u[s / NODE_DOFS][s % NODE_DOFS] = v;
+        }
+    }
+
+    /// u_s − Σ w u_m − Σ Z (d_n − d_n⁰)_k of a translation tie: its moving offset c·λ when
+    /// the slave satisfies the tie exactly.
+    fn link_residue(&self, t: usize, state: &State) -> f64 {
+        let tie = &self.dofs.ties[t];
+        let s = tie.slave;
+        state.u[s / NODE_DOFS][s % NODE_DOFS]
+            - tie.masters.iter().map(|&(m, w)| w * state.u[m / NODE_DOFS][m % NODE_DOFS]).sum::<f64>()
+            - self.dofs.link_displacement(t, state, &self.frames0)
     }
 
     /// Displacement of node `n` in `state`.

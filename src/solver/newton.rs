@@ -294,6 +294,10 @@ impl<'m> Solver<'m> {
             self.timings.contact += t.elapsed().as_secs_f64();
             self.timings.contact_search = self.nodal_forces.iter().map(|c| c.search_seconds()).sum();
         }
+        if tangent {
+            // Rigid links: second-order term of the state-dependent tie weights.
+            self.model.dofs.add_link_stiffness(&self.f_int, &self.f_ext, &self.assembler.pattern, &mut self.values);
+        }
         Ok(info.energy)
     }
 
