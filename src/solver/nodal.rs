@@ -42,6 +42,29 @@ pub trait NodalForces: Send {
     fn summary(&self) -> Option<(String, serde_json::Value)> {
         None
     }
+    /// Node pairs (a, b), a ≠ b, whose coupling blocks ∂f_a/∂u_b this term may report from
+    /// [`NodalForces::add_coupled`] (e.g. a contact node and the nodes of the surface it may
+    /// touch). The solver puts them into the tangent's sparsity pattern before the symbolic
+    /// analysis when the term is added; a block reported later outside the pattern makes it
+    /// grow the pattern and redo the analysis.
+    fn couplings(&self, model: &Model) -> Vec<(usize, usize)> {
+        let _ = model;
+        Vec::new()
+    }
+    /// [`NodalForces::add`] for terms that couple different nodes: also pushes the blocks
+    /// (a, b, ∂f_a/∂u_b), a ≠ b, into `pairs`. The solver adds the symmetric part of −∂f/∂u
+    /// over all blocks to the tangent (through the ties). Default: `add`, no pair blocks.
+    fn add_coupled(
+        &mut self,
+        model: &Model,
+        state: &State,
+        f_ext: &mut [f64],
+        jacobian: &mut Vec<(usize, Matrix3<f64>)>,
+        pairs: &mut Vec<(usize, usize, Matrix3<f64>)>,
+    ) {
+        let _ = pairs;
+        self.add(model, state, f_ext, jacobian);
+    }
 }
 
 /// Adds −½(J + Jᵀ) of node `n`'s translations to the upper-triangular CSC tangent `values`.
@@ -63,4 +86,35 @@ pub(super) fn add_node_block(model: &Model, col_ptr: &[usize], row_idx: &[usize]
             }
         }
     }
+}
+
+/// Adds the symmetric part of −J for the node-pair block J = ∂f_a/∂u_b, i.e. −½J at
+/// (a, b) and −½Jᵀ at (b, a), to the upper-triangular CSC tangent `values`, through the tie
+/// transformation (Tᵀ K T: rows and columns of tied slaves expand onto their masters; of the
+/// full matrix only entries with row ≤ column are stored). Returns false when an entry falls
+/// outside the pattern (nothing is added for it).
+pub(super) fn add_node_pair_block(model: &Model, col_ptr: &[usize], row_idx: &[usize], values: &mut [f64], a: usize, b: usize, j: &Matrix3<f64>) -> bool {
+    let ea: [Vec<(usize, f64)>; 3] = std::array::from_fn(|k| model.dofs.expand(NODE_DOFS * a + k));
+    let eb: [Vec<(usize, f64)>; 3] = std::array::from_fn(|k| model.dofs.expand(NODE_DOFS * b + k));
+    let mut inside = true;
+    for (rows_of, cols_of, transposed) in [(&ea, &eb, false), (&eb, &ea, true)] {
+        for p in 0..3 {
+            for q in 0..3 {
+                let v = -0.5 * if transposed { j[(q, p)] } else { j[(p, q)] };
+                for &(r, wr) in &rows_of[p] {
+                    for &(c, wc) in &cols_of[q] {
+                        if r > c {
+                            continue;
+                        }
+                        let rows = &row_idx[col_ptr[c]..col_ptr[c + 1]];
+                        match rows.binary_search(&r) {
+                            Ok(s) => values[col_ptr[c] + s] += wr * wc * v,
+                            Err(_) => inside = false,
+                        }
+                    }
+                }
+            }
+        }
+    }
+    inside
 }
