@@ -3,10 +3,14 @@
 //! Mechanics*, 2nd ed. 2006, §4.2 (node-to-segment gap and its variation), §5.2 (penalty)
 //! and §10.3 (regularised friction); Laursen 2002, ch. 5).
 //!
-//! For each pair of adjacent plies (k, k+1) of a panel, every node of ply k+1 (the slave) is
-//! tried against the surface of ply k (the master) — one pass: the plies of a panel share
-//! its pattern mesh, so their nodes coincide in plan and a second pass would only duplicate
-//! the constraint (two passes made Newton alternate between them). Each master quad is split
+//! For each pair of adjacent plies (k, k+1) of a panel, every node of ply k (the slave, the
+//! outer one, on the director side) is tried against the surface of ply k+1 (the master) —
+//! one pass: the plies of a panel share its pattern mesh, so their nodes coincide in plan
+//! and a second pass would only duplicate the constraint (two passes made Newton alternate
+//! between them). The outer ply is the slave because a garment drapes convexly over a body:
+//! seen from the convex side the closest point of a faceted surface is unique and moves
+//! continuously; from the concave side the normal prisms of neighbouring facets overlap and
+//! the closest facet — with it the force direction — can jump (Newton then cycles). Each master quad is split
 //! into two triangles along its 1–3 diagonal; the slave node x_s is matched with the closest
 //! point x_c = Σ λ_j x_j of the nearest triangle (unit normal n = (x₂−x₁)×(x₃−x₁)/|…|).
 //! Gap: g = σ n·(x_s − x₁) − c when x_c lies inside the triangle, g = σ'|x_s − x_c| − c on
@@ -293,7 +297,7 @@ fn project(p: &[Vector3<f64>; 3], x: &Vector3<f64>) -> Option<([f64; 3], Vector3
 }
 
 impl InterplyContact {
-    /// Contact between the plies of `setup.ply_pairs` of `model` (nodes of b against a).
+    /// Contact between the plies of `setup.ply_pairs` of `model` (nodes of a against b).
     pub fn new(model: &Model, setup: &InterplySetup) -> Self {
         let n = model.n_nodes();
         let mut area = vec![0.0f64; n];
@@ -329,7 +333,7 @@ impl InterplyContact {
         let x0 = |a: usize| model.x0[a];
         for &(pa, pb) in &setup.ply_pairs {
             {
-                let (slave_part, master_part) = (pb, pa);
+                let (slave_part, master_part) = (pa, pb);
                 let (ss, ms) = (surface_of_part[&slave_part], surface_of_part[&master_part]);
                 let master = &surfaces[ms];
                 let bvh = Bvh::from_leaves(BvhBuildStrategy::default(), &boxes(master, &x0));
@@ -866,8 +870,8 @@ mod tests {
     const H: f64 = 0.001;
     const CLEAR: f64 = 1e-4;
 
-    /// A 0.1 m master quad (part 0, z = 0) and a 1 cm slave quad (part 1) whose nodes lie
-    /// over the master's interior, its mid-surface H + CLEAR above (a clearance of CLEAR).
+    /// A 0.1 m master quad (part 0, z = 0) and a 1 cm slave quad (part 1, the first of the
+    /// ply pair) whose nodes lie over the master's interior, its mid-surface H + CLEAR above (a clearance of CLEAR).
     fn pair() -> scene::BuiltScene {
         let text = format!(
             r#"Scene(name: "s", materials: {{"m": StVenantKirchhoff(young: 1.0e6, poisson: 0.3)}},
@@ -882,7 +886,7 @@ mod tests {
     }
 
     fn setup(friction: f64) -> InterplySetup {
-        InterplySetup { ply_pairs: vec![(0, 1)], settings: InterplySettings { friction, ..Default::default() } }
+        InterplySetup { ply_pairs: vec![(1, 0)], settings: InterplySettings { friction, ..Default::default() } }
     }
 
     /// Forces (all DOFs) and the dense Jacobian ∂f/∂x over the translations of `nodes`.
