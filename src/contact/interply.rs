@@ -244,7 +244,7 @@ pub struct InterplyIncrement {
     pub sliding: usize,
     /// Largest penetration between plies (−gap), m.
     pub max_penetration: f64,
-    /// Largest penetration as a fraction of the thinner ply of its pair.
+    /// Largest penetration as a fraction of its pair's mean ply thickness (h_s + h_m)/2.
     pub max_penetration_ratio: f64,
     /// Sum of the normal contact forces (N).
     pub normal_force: f64,
@@ -641,7 +641,7 @@ impl NodalForces for InterplyContact {
                 rep.active += 1;
                 rep.activated += usize::from(!h.active);
                 rep.max_penetration = rep.max_penetration.max(-ev.gap);
-                rep.max_penetration_ratio = rep.max_penetration_ratio.max(-ev.gap / (2.0 * r.offset));
+                rep.max_penetration_ratio = rep.max_penetration_ratio.max(-ev.gap / r.offset);
                 rep.normal_force += ev.lambda;
                 if ev.sliding {
                     rep.sliding += 1;
