@@ -52,6 +52,9 @@ pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &m
     if let Some(c) = &built.contact {
         crate::contact::attach(&mut solver, model, c);
     }
+    if let Some(s) = &built.interply {
+        crate::contact::interply::attach(&mut solver, model, s);
+    }
     let (dofs, tangent_nnz, factor_nnz) = solver.sizes();
     let mut summary = Summary {
         scene: scene.name.clone(),
@@ -121,6 +124,11 @@ pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &m
     summary.timings = solver.timings.clone();
     if let Some(c) = &built.contact {
         crate::contact::summarize(scene, c, model, &state, solver.nodal_forces(), &mut summary.extra);
+    }
+    if built.interply.is_some() {
+        for (name, v) in solver.nodal_forces().iter().filter_map(|c| c.summary()) {
+            summary.extra.entry(name).or_insert(v);
+        }
     }
     if let Some(e) = io_error {
         return Err(RunError::Io(e));

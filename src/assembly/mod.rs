@@ -90,6 +90,13 @@ pub struct AssemblyInfo {
 impl Assembler {
     /// Builds the pattern and the element scatter maps of `model`.
     pub fn new(model: &Model) -> Self {
+        Self::with_couplings(model, &[])
+    }
+
+    /// [`Assembler::new`] with the translations of each node pair (a, b) of `couplings`
+    /// coupled in the pattern as well (through the ties), for nodal-force terms with
+    /// node-pair blocks (inter-ply contact).
+    pub fn with_couplings(model: &Model, couplings: &[(usize, usize)]) -> Self {
         let n_nodes = model.n_nodes();
         let eq = &model.dofs.eq;
         // Node adjacency through elements.
@@ -133,6 +140,15 @@ impl Assembler {
             for (a, &r) in all.iter().enumerate() {
                 for &c in &all[a..] {
                     cols[c].push(r);
+                }
+            }
+        }
+        for &(a, b) in couplings {
+            let ea: Vec<usize> = (0..3).flat_map(|k| model.dofs.expand(NODE_DOFS * a + k)).map(|(e, _)| e).collect();
+            let eb: Vec<usize> = (0..3).flat_map(|k| model.dofs.expand(NODE_DOFS * b + k)).map(|(e, _)| e).collect();
+            for &r in &ea {
+                for &c in &eb {
+                    cols[r.max(c)].push(r.min(c));
                 }
             }
         }

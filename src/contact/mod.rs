@@ -3,6 +3,7 @@
 
 pub mod body;
 pub mod drape;
+pub mod interply;
 pub mod mechanics;
 pub mod stabilize;
 pub mod trimesh_io;

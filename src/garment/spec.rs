@@ -26,6 +26,9 @@ pub struct GarmentSpec {
     /// Quilting lines joining a panel's plies through the thickness.
     #[serde(default)]
     pub stitch_lines: Vec<StitchLineSpec>,
+    /// Contact between adjacent plies of multi-ply panels (on by default).
+    #[serde(default)]
+    pub interply: crate::contact::interply::InterplySpec,
 }
 
 fn two_percent() -> f64 {

@@ -49,6 +49,8 @@ pub struct BuiltScene {
     pub warnings: Vec<String>,
     /// Panel, ply and material ids and the flat pattern, when the scene has a garment.
     pub garment: Option<crate::garment::export::GarmentLayout>,
+    /// Contact between adjacent plies of the garment's multi-ply panels.
+    pub interply: Option<crate::contact::interply::InterplySetup>,
 }
 
 fn v3(a: [f64; 3]) -> Vector3<f64> {
@@ -481,10 +483,14 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
             .collect();
         warnings.extend(gm.unsupported(g, &loc, &supported).into_iter().map(|e| e.to_string()));
     }
+    let interply = match &garment {
+        Some((g, gm)) => crate::contact::interply::garment_setup(g, gm, garment_first_part, &loc)?,
+        None => None,
+    };
     crate::garment::apply_tapes(&seams, &x0, &mut elements, &mut sections);
     let dofs = DofMap::with_ties(&fixed, ties).map_err(|e| loc.at(None, Some("seams"), "seams", e))?;
     let model = Model { x0, frames0, elements, sections, parts, dofs, loads };
-    Ok(BuiltScene { model, steps, monitors, node_sets, quality, imperfection, seams, warnings, garment: layout, contact })
+    Ok(BuiltScene { model, steps, monitors, node_sets, quality, imperfection, seams, warnings, garment: layout, contact, interply })
 }
 
 fn check_young_poisson(young: f64, poisson: f64, bad: &dyn Fn(&str, &str) -> SceneError) -> Result<(), SceneError> {

@@ -50,6 +50,14 @@ pub struct Timings {
     /// Proximity search of the contact contributions (part of `contact`).
     #[serde(default)]
     pub contact_search: f64,
+    /// Times the tangent's pattern grew (and the symbolic analysis was redone, its time in
+    /// `analysis`) because a nodal-force term reported a node-pair block outside it.
+    #[serde(default)]
+    pub pattern_growths: usize,
+    /// Node-pair blocks left out of the tangent because the grown pattern could not be
+    /// analysed (the forces are exact; Newton is then quasi-Newton).
+    #[serde(default)]
+    pub dropped_pair_blocks: usize,
 }
 
 /// A converged nominal increment.
@@ -188,6 +196,8 @@ pub struct Solver<'m> {
     pub(super) nodal_norm: f64,
     /// Reports of the nodal-force terms since the last reported increment.
     pub(super) extra_reports: Vec<serde_json::Value>,
+    /// Node pairs coupled in the pattern for the nodal-force terms' pair blocks.
+    pub(super) couplings: Vec<(usize, usize)>,
 }
 
 impl<'m> Solver<'m> {
@@ -211,13 +221,44 @@ impl<'m> Solver<'m> {
             nodal_norm: 0.0,
             timings,
             extra_reports: Vec::new(),
+            couplings: Vec::new(),
         })
     }
 
     /// Adds configuration-dependent nodal forces (contact, stabilization, springs) to every
     /// later assembly.
     pub fn add_nodal_forces(&mut self, forces: Box<dyn super::NodalForces + 'm>) {
+        let pairs = forces.couplings(self.model);
         self.nodal_forces.push(forces);
+        if !pairs.is_empty() {
+            self.grow_pattern(pairs);
+        }
+    }
+
+    /// Couples the node pairs `pairs` in the tangent's pattern: rebuilds the pattern and the
+    /// scatter maps and redoes the symbolic analysis. Returns false (pattern unchanged) when
+    /// the analysis of the grown pattern fails.
+    pub(super) fn grow_pattern(&mut self, pairs: Vec<(usize, usize)>) -> bool {
+        let t0 = Instant::now();
+        let mut couplings = self.couplings.clone();
+        couplings.extend(pairs);
+        couplings.sort_unstable();
+        couplings.dedup();
+        let assembler = Assembler::with_couplings(self.model, &couplings);
+        let threads = if self.settings.threads == 0 { rayon::current_num_threads() } else { self.settings.threads };
+        let grown = match SparseCholesky::analyse(&assembler.pattern, threads) {
+            Ok(cholesky) => {
+                self.values = vec![0.0; assembler.nnz()];
+                self.assembler = assembler;
+                self.cholesky = cholesky;
+                self.couplings = couplings;
+                self.timings.pattern_growths += 1;
+                true
+            }
+            Err(_) => false,
+        };
+        self.timings.analysis += t0.elapsed().as_secs_f64();
+        grown
     }
 
     /// The configuration-dependent nodal-force terms.
@@ -282,9 +323,10 @@ impl<'m> Solver<'m> {
         if !self.nodal_forces.is_empty() {
             let t = Instant::now();
             let mut jacobian = Vec::new();
+            let mut pairs = Vec::new();
             let mut f = vec![0.0; self.f_ext.len()];
             for forces in self.nodal_forces.iter_mut() {
-                forces.add(self.model, state, &mut f, &mut jacobian);
+                forces.add_coupled(self.model, state, &mut f, &mut jacobian, &mut pairs);
             }
             self.nodal_norm = f.iter().map(|v| v * v).sum::<f64>().sqrt();
             // Forces on tied slaves fold onto their masters like the other loads.
@@ -294,6 +336,24 @@ impl<'m> Solver<'m> {
                 let p = &self.assembler.pattern;
                 for (n, j) in &jacobian {
                     super::nodal::add_node_block(self.model, &p.col_ptr, &p.row_idx, &mut self.values, *n, j);
+                }
+                let mut outside = Vec::new();
+                for &(a, b, ref j) in &pairs {
+                    let p = &self.assembler.pattern;
+                    if !super::nodal::add_node_pair_block(self.model, &p.col_ptr, &p.row_idx, &mut self.values, a, b, j) {
+                        outside.push((a, b));
+                    }
+                }
+                if !outside.is_empty() {
+                    // A pair came into contact outside the reference neighbourhood (rare):
+                    // grow the pattern and assemble again; if that fails, drop the blocks.
+                    self.timings.contact += t.elapsed().as_secs_f64();
+                    let n_outside = outside.len();
+                    if self.grow_pattern(outside) {
+                        return self.assemble(state, scales, tangent);
+                    }
+                    self.timings.dropped_pair_blocks += n_outside;
+                    return Ok(info.energy);
                 }
             }
             self.timings.contact += t.elapsed().as_secs_f64();
