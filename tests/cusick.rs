@@ -7,6 +7,9 @@
 //! Dynamic step (backward Euler to rest); the mesh study and fold distribution are produced
 //! by `examples/cusick.rs` and reported in the issue notes.
 
+use nalgebra::Vector3;
+use plyshell::contact::drape::seed_outside_support;
+use plyshell::solver::imperfection::RandomField;
 use plyshell::{analysis, scene};
 
 /// Drape outcome of one run.
@@ -15,9 +18,12 @@ struct Drape {
     penetration_over_h: f64,
 }
 
-/// Runs the shipped Cusick scene with `preset` to rest; returns its drape coefficient (%)
-/// and the largest penetration over the thickness.
-fn cusick(preset: &str) -> Drape {
+/// Runs the shipped Cusick scene with `preset` to rest — with `seed` ≠ 0 from a specimen
+/// carrying the seeded 0.1 mm random-field imperfection (correlation length 50 mm) of
+/// `examples/cusick.rs`, tapered to zero over r = 90…110 mm so the clamped part between the
+/// discs stays flat — and returns its drape coefficient (%) and the largest penetration over
+/// the thickness.
+fn cusick(preset: &str, seed: u64) -> Drape {
     let path = concat!(env!("CARGO_MANIFEST_DIR"), "/garments/drape/cusick.ron");
     let text = std::fs::read_to_string(path).expect("scene");
     let h = plyshell::material::FabricProperties::preset(preset).expect("preset").thickness;
@@ -28,14 +34,18 @@ fn cusick(preset: &str) -> Drape {
         .replace("translation: (0.0, 0.0, 0.010149999)", &format!("translation: (0.0, 0.0, {:e})", 0.5 * h - 1e-9 + 0.01))
         .replace("output: (every: 50)", "output: (vtu: false)");
     let sc = scene::parse(path, &text).expect("parse");
-    let built = scene::build(&sc, path, &text).expect("build");
+    let mut built = scene::build(&sc, path, &text).expect("build");
+    if seed != 0 {
+        let rf = RandomField { amplitude: 0.1e-3, correlation_length: 0.05, seed };
+        built.model = seed_outside_support(&built.model, &rf, &Vector3::zeros(), 0.09, 0.11);
+    }
     let s = analysis::run(&sc, &built, &Default::default(), &mut |_| {}).expect("solve");
     let d = &s.extra["drape"];
     let dc = d["drape_coefficient_percent"].as_f64().expect("dc");
     let folds = d["folds"].as_u64().expect("folds");
     let pen = d["max_penetration"].as_f64().expect("penetration");
     println!(
-        "{preset}: DC {dc:.1} %, folds {folds}, penetration {:.2} % of h, {} DOFs, {} time steps, {} Newton iterations, {:.1} s",
+        "{preset} (seed {seed}): DC {dc:.1} %, folds {folds}, penetration {:.2} % of h, {} DOFs, {} time steps, {} Newton iterations, {:.1} s",
         100.0 * pen / h,
         s.sizes.dofs,
         s.increments.len(),
@@ -49,17 +59,22 @@ fn cusick(preset: &str) -> Drape {
 /// polyester faille (B = 1.86e-6 N·m, measured 28.3 %), by at least 5 points; cotton lies in
 /// 50–95 %, faille in the plausible 15–95 % of real fabrics (an elastic model without the
 /// bending hysteresis of real yarns drapes a limp fabric less deeply than measured); neither
-/// penetrates the discs by more than 5 % of its thickness.
+/// penetrates the discs by more than 5 % of its thickness (the issue's bound), nor does cotton
+/// started from a seeded imperfection of its overhang (seed 1), whose coefficient stays
+/// within the plausible range too.
 #[test]
 fn stiffer_fabric_drapes_to_a_higher_coefficient() {
-    let (cotton, faille) = std::thread::scope(|s| {
-        let c = s.spawn(|| cusick("cotton_broadcloth"));
-        let f = s.spawn(|| cusick("polyester_faille"));
-        (c.join().expect("cotton run"), f.join().expect("faille run"))
+    let (cotton, faille, perturbed) = std::thread::scope(|s| {
+        let c = s.spawn(|| cusick("cotton_broadcloth", 0));
+        let f = s.spawn(|| cusick("polyester_faille", 0));
+        let p = cusick("cotton_broadcloth", 1);
+        (c.join().expect("cotton run"), f.join().expect("faille run"), p)
     });
     assert!((50.0..=95.0).contains(&cotton.dc), "DC {} % outside the plausible range for cotton broadcloth", cotton.dc);
     assert!((15.0..=95.0).contains(&faille.dc), "DC {} % outside the plausible range for polyester faille", faille.dc);
     assert!(cotton.dc > faille.dc + 5.0, "stiffer cotton DC {} % should exceed faille DC {} %", cotton.dc, faille.dc);
     assert!(cotton.penetration_over_h < 0.05, "cotton penetration {} of h", cotton.penetration_over_h);
     assert!(faille.penetration_over_h < 0.05, "faille penetration {} of h", faille.penetration_over_h);
+    assert!(perturbed.penetration_over_h < 0.05, "perturbed cotton penetration {} of h", perturbed.penetration_over_h);
+    assert!((50.0..=95.0).contains(&perturbed.dc), "perturbed cotton DC {} % outside the plausible range", perturbed.dc);
 }

@@ -168,3 +168,33 @@ pub fn drape_report(model: &Model, state: &State, center: &Vector3<f64>, disc_ra
         max_penetration,
     }
 }
+
+/// `model` with the seeded random field `rf` (see `solver::imperfection`, scaled so its
+/// largest |w| over the nodes is `rf.amplitude`) seeded only outside the support of a Cusick
+/// specimen: the field w is multiplied by the taper s(r) = 3t² − 2t³, t = (r − r0)/(r1 − r0)
+/// clamped to [0, 1], of the horizontal distance r from `center`, so the part held on the
+/// disc (r ≤ r0) stays flat between the discs and does not start inside them. Each node moves
+/// by s w along its reference director and the director is turned by −∇(s w) = −(s ∇w +
+/// w ∇s) (the perturbed surface's normal to first order, as for the untapered field).
+pub fn seed_outside_support(model: &Model, rf: &crate::solver::imperfection::RandomField, center: &Vector3<f64>, r0: f64, r1: f64) -> Model {
+    let full = crate::solver::imperfection::seed_random_field(model, rf);
+    let mut m = model.clone();
+    let width = (r1 - r0).max(1e-12);
+    for n in 0..model.n_nodes() {
+        let fr = model.frames0[n];
+        let w = (full.x0[n] - model.x0[n]).dot(&fr.d);
+        // Tilt of the full field, (−∇w·t1, −∇w·t2).
+        let dd = full.frames0[n].d - fr.d;
+        let mut rel = model.x0[n] - center;
+        rel.z = 0.0;
+        let r = rel.norm();
+        let t = ((r - r0) / width).clamp(0.0, 1.0);
+        let s = t * t * (3.0 - 2.0 * t);
+        let ds = if r > 0.0 { 6.0 * t * (1.0 - t) / width } else { 0.0 };
+        let grad_s = if r > 0.0 { rel * (ds / r) } else { Vector3::zeros() };
+        m.x0[n] = model.x0[n] + fr.d * (s * w);
+        let tilt = [s * dd.dot(&fr.t1) - w * grad_s.dot(&fr.t1), s * dd.dot(&fr.t2) - w * grad_s.dot(&fr.t2)];
+        m.frames0[n] = fr.tilted(tilt);
+    }
+    m
+}

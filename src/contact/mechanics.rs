@@ -5,21 +5,34 @@
 //! Gap of node a with body b: g = d_b(x_a) − h_a/2, with d_b the body's signed distance
 //! (parry3d closest-point query, bounded by the half-thickness) and h_a the largest
 //! thickness of the sections around the node (the shell's face, not its mid-surface,
-//! touches the body). Normal: λ = k_n⟨−g⟩, internal force k_n g n, tangent
-//! k_n (n nᵀ + g ∇n) with ∇n the Hessian of the signed distance (analytic for the sphere
-//! and the plane, central differences of the projected normal otherwise).
+//! touches the body). Normal: augmented Lagrangian with one Uzawa update per converged
+//! increment or time step (Simo & Laursen, Comput. Struct. 42, 1992; Wriggers 2006 §6.3.2):
+//! λ = ⟨λ̂ − k_n g⟩ with the pair's multiplier λ̂ ≥ 0, internal force −λ n, tangent
+//! k_n n nᵀ − λ ∇n with ∇n the Hessian of the signed distance (analytic for the sphere
+//! and the plane, central differences of the projected normal otherwise). On commit
+//! λ̂ ← λ, so a pair that stays in contact is pushed out by k_n|g| more at the next step and
+//! its penetration decays geometrically towards zero over the increments of a pseudo-
+//! transient drape, whatever the load the node carries (a cloth hanging from a few nodes on
+//! a neck rim loads them far above the uniform pressure the penalty is sized for); a
+//! separated pair's multiplier is reset to zero.
 //! Friction: regularised Coulomb law measured from an anchor point x̂ (where the node
-//! stuck): s = (I − nnᵀ)(x − x̂), t = −μλ tanh(k_t|s|/(μλ)) ŝ — the elastic-slip penalty
-//! k_t for small s, saturating smoothly at the Coulomb limit μλ (a hard stick/slip switch
+//! stuck): s = (I − n̄n̄ᵀ)(x − x̂), t = −μλ̄ tanh(k_t|s|/(μλ̄)) ŝ — the elastic-slip penalty
+//! k_t for small s, saturating smoothly at the Coulomb limit μλ̄ (a hard stick/slip switch
 //! made Newton cycle between the two branches on drapes). μ is the static coefficient unless
-//! the pair slid in the previous increment (then kinetic). Tangent (consistent for fixed λ
-//! and n): [k_t sech²(·) ŝŝᵀ + μλ tanh(·)/|s| (I − ŝŝᵀ)](I − nnᵀ), symmetrised. The
-//! unsymmetric coupling −μ tanh(·) k_n ŝ nᵀ (friction change from a normal motion) is left
-//! out rather than symmetrised: symmetrising puts ½μk_n ŝ into the normal row, so a long
-//! slide step produces a spurious normal force of order μk_n·slide that lifts the node off
-//! (measured: Newton then cycles between contact and separation). Without it the iteration
-//! is quasi-Newton while nodes slide (linear convergence, exact residual). A pair counts as
-//! sliding when k_t|s| > 2μλ; on convergence its anchor is dragged to trail the node by
+//! the pair slid in the previous increment (then kinetic). The normal force λ̄ and the
+//! tangent plane n̄ are lagged — those of the last converged state, the pair's multiplier λ̂
+//! and normal — as in the lagged dissipative potential of Incremental Potential Contact (Li et
+//! al., ACM Trans. Graph. 39(4), 2020, §5): the friction force is then the gradient of
+//! Φ(s) = (μλ̄)²/k_t · ln cosh(k_t|s|/(μλ̄)) and its tangent
+//! P̄ [k_t sech²(·) ŝŝᵀ + μλ̄ tanh(·)/|s| (I − ŝŝᵀ)] P̄ is exact and symmetric. With the
+//! current λ and n instead, the exact tangent has the unsymmetric couplings
+//! −μ k_n (tanh − arg sech²) ŝ nᵀ (friction change from a normal motion) and the rotation of
+//! the tangent plane on a curved body; the symmetric solver had to leave them out and Newton
+//! 2-cycled on spheres with friction (time steps rejected every few steps). The lag bounds
+//! the friction by the normal force of the previous step, which at rest is the current one.
+//! A pair just coming into contact (λ̂ = 0) uses its current λ and n, with the coupling
+//! left out of the tangent. A pair counts as
+//! sliding when k_t|s| > 2μλ̄; on convergence its anchor is dragged to trail the node by
 //! 2μ_kλ/k_t (return mapping), so friction is path-dependent across increments.
 //! Penalty: k_n = c·A·a/ℓ² per node, with A the membrane stiffness (N/m) of the stiffest
 //! section at the node (E·h, or the fabric's larger tensile stiffness), a the node's
@@ -65,6 +78,10 @@ struct PairHistory {
     sliding: bool,
     active: bool,
     slip: f64,
+    /// Augmented-Lagrangian multiplier λ̂ (N) of the last converged state.
+    multiplier: f64,
+    /// Body normal at the node in the last converged state (the lagged tangent plane).
+    normal: Vector3<f64>,
 }
 
 /// Evaluation of one node–body pair.
@@ -75,6 +92,7 @@ struct PairEval {
     tangential: Vector3<f64>,
     sliding: bool,
     active: bool,
+    normal: Vector3<f64>,
 }
 
 /// Active-set changes and contact resultants of one converged increment.
@@ -192,26 +210,30 @@ impl ContactSet {
                     let reach = r + 2.0 * self.area[i].sqrt();
                     let Some(prox) = body.proximity(&x, reach) else { continue };
                     let g = prox.distance - r;
-                    if g >= 0.0 {
+                    let hist = self.history[i * nb + b];
+                    let lambda = hist.multiplier - k * g;
+                    if lambda <= 0.0 {
                         evals[b].gap = g;
                         continue;
                     }
                     let n = prox.normal;
-                    let lambda = -k * g;
-                    f += n * (k * g);
+                    f -= n * lambda;
                     if with_tangent {
-                        kk += n * n.transpose() * k + distance_hessian(body, &x, &n, prox.distance) * (k * g);
+                        kk += n * n.transpose() * k - distance_hessian(body, &x, &n, prox.distance) * lambda;
                     }
-                    let hist = self.history[i * nb + b];
-                    let mut ev = PairEval { gap: g, lambda, active: true, ..Default::default() };
+                    let mut ev = PairEval { gap: g, lambda, active: true, normal: n, ..Default::default() };
                     // Saturation level: static unless the pair slid in the last increment.
                     let mu = if hist.sliding { body.mu_kinetic } else { body.mu_static };
                     if mu > 0.0 {
                         let anchor = hist.anchor.unwrap_or(self.committed_x[i]);
-                        let p = Matrix3::identity() - n * n.transpose();
+                        // Lagged normal force and tangent plane of the last converged state
+                        // (a pair already in contact there); a pair just coming into contact
+                        // uses the current ones.
+                        let (lambda_f, nf) = if hist.multiplier > 0.0 { (hist.multiplier, hist.normal) } else { (lambda, n) };
+                        let p = Matrix3::identity() - nf * nf.transpose();
                         let s = p * (x - anchor);
                         let sn = s.norm();
-                        let cap = mu * lambda;
+                        let cap = mu * lambda_f;
                         let arg = kt * sn / cap;
                         if sn > 0.0 {
                             let sh = s / sn;
@@ -223,7 +245,8 @@ impl ContactSet {
                             if with_tangent {
                                 let along = kt * (1.0 - th * th);
                                 let across = cap * th / sn;
-                                kk += (sh * sh.transpose() * along + (Matrix3::identity() - sh * sh.transpose()) * across) * p;
+                                // P (along ŝŝᵀ + across (I − ŝŝᵀ)) P, ŝ ⊥ n_f.
+                                kk += sh * sh.transpose() * (along - across) + p * across;
                             }
                         } else if with_tangent {
                             kk += p * kt;
@@ -315,6 +338,8 @@ impl NodalForces for ContactSet {
                     rep.activated += usize::from(!h.active);
                     rep.max_penetration = rep.max_penetration.max(-ev.gap);
                     rep.normal_force += ev.lambda;
+                    h.multiplier = ev.lambda;
+                    h.normal = ev.normal;
                     let anchor = h.anchor.unwrap_or(self.committed_x[i]);
                     if ev.sliding {
                         rep.sliding += 1;
@@ -334,6 +359,7 @@ impl NodalForces for ContactSet {
                     h.active = true;
                 } else {
                     rep.released += usize::from(h.active);
+                    h.multiplier = 0.0;
                     h.active = false;
                     h.sliding = false;
                     h.anchor = None;

@@ -431,7 +431,10 @@ impl<'m> Solver<'m> {
             if energy0.is_none() {
                 energy0 = Some(du.iter().zip(&r).map(|(a, b)| a * b).sum::<f64>().abs().max(1e-300));
             }
-            // Safeguarded full step: halve only when the trial state cannot be evaluated.
+            // Safeguarded full step: halve only when the trial state cannot be evaluated — an
+            // element fails, or a nodal-force term finds it inadmissible and writes NaN into
+            // the forces (the `NodalForces::add` convention, e.g. a node carried through a
+            // body): backtracking along the Newton direction keeps the time step.
             let base = state.clone();
             let mut step = 1.0;
             let mut accepted = false;
@@ -440,11 +443,12 @@ impl<'m> Solver<'m> {
                 *state = base.clone();
                 self.model.update(state, &du, step);
                 match self.assemble(state, scales, true) {
-                    Ok(e) => {
+                    Ok(e) if self.f_ext.iter().all(|v| !v.is_nan()) => {
                         energy = e;
                         accepted = true;
                         break;
                     }
+                    Ok(_) => last_failure = None,
                     Err(f) => last_failure = Some(f),
                 }
                 step *= 0.5;
@@ -453,7 +457,7 @@ impl<'m> Solver<'m> {
                 *state = base;
                 let (el, cause) = match last_failure {
                     Some(f) => (Some(f.element), format!("element {} failed: {}", f.element, f.failure)),
-                    None => (None, "no evaluable trial state".into()),
+                    None => (None, "no admissible trial state along the Newton direction (a nodal-force term, e.g. contact with a node through a body, rejected every backtracked step)".into()),
                 };
                 return TimeStep::Failed { iteration: it, residuals, worst_element: el, cause };
             }

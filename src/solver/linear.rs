@@ -50,6 +50,8 @@ pub struct SparseCholesky {
     buffer: MemBuffer,
     kind: FactorKind,
     par: Par,
+    /// Matrix values of the factorization held in `l_values`, if it succeeded.
+    factored: Option<Vec<f64>>,
 }
 
 impl SparseCholesky {
@@ -72,7 +74,7 @@ impl SparseCholesky {
         ]);
         let buffer = MemBuffer::try_new(req).map_err(|_| LinearError::Symbolic("out of memory for workspace".into()))?;
         let l_values = vec![0.0; symbolic.len_val()];
-        Ok(Self { pattern: sym, symbolic, l_values, buffer, kind: FactorKind::Llt, par })
+        Ok(Self { pattern: sym, symbolic, l_values, buffer, kind: FactorKind::Llt, par, factored: None })
     }
 
     /// Which factorization the last successful numeric step produced.
@@ -90,8 +92,22 @@ impl SparseCholesky {
         SparseColMatRef::new(s, values)
     }
 
-    /// Numeric factorization of the matrix with the analysed pattern and `values`.
+    /// Numeric factorization of the matrix with the analysed pattern and `values`; a matrix
+    /// equal to the one factorized last keeps that factorization (e.g. the inertia check of
+    /// a converged increment and the first iteration of the next one).
     pub fn factorize(&mut self, values: &[f64]) -> Result<FactorKind, LinearError> {
+        if self.factored.as_deref() == Some(values) {
+            return Ok(self.kind);
+        }
+        let mut factored = self.factored.take().unwrap_or_default();
+        let kind = self.factorize_numeric(values)?;
+        factored.clear();
+        factored.extend_from_slice(values);
+        self.factored = Some(factored);
+        Ok(kind)
+    }
+
+    fn factorize_numeric(&mut self, values: &[f64]) -> Result<FactorKind, LinearError> {
         let par = self.par;
         let a = SparseColMatRef::new(self.pattern.as_ref(), values);
         let llt = self.symbolic.factorize_numeric_llt::<f64>(
