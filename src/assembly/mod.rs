@@ -52,6 +52,12 @@ pub struct AssemblyFailure {
     pub failure: ElementFailure,
 }
 
+impl std::fmt::Display for AssemblyFailure {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "element {} failed: {}", self.element, self.failure)
+    }
+}
+
 /// Pattern, scatter maps and scratch for assembling one model.
 #[derive(Debug)]
 pub struct Assembler {

@@ -107,7 +107,7 @@ pub fn parse_stl(bytes: &[u8]) -> Result<TriSoup, String> {
                 corners.push([c[0], c[1], c[2]]);
             }
         }
-        if corners.len() % 3 != 0 {
+        if !corners.len().is_multiple_of(3) {
             return Err(format!("{} vertices is not a whole number of facets", corners.len()));
         }
     }

@@ -388,7 +388,7 @@ impl<'m> Solver<'m> {
         let scales_at = |lam: f64| -> Vec<f64> { start.iter().zip(target).map(|(a, b)| a + lam * (b - a)).collect() };
         // Predictor from the tangent at the converged state.
         if let Err(f) = self.assemble(state, &scales_at(lambda0), true) {
-            return fail(0, &residuals, Some(f.element), format!("element {} failed: {}", f.element, f.failure));
+            return fail(0, &residuals, Some(f.element), f.to_string());
         }
         let f = self.load_change(state, start, target);
         let Some((pivots, _, ut)) = self.factor_and_probe(&f) else {
@@ -428,7 +428,7 @@ impl<'m> Solver<'m> {
             let lam = lambda0 + dlam;
             let energy = match self.assemble(state, &scales_at(lam), true) {
                 Ok(e) => e,
-                Err(fl) => return fail(it, &residuals, Some(fl.element), format!("element {} failed: {}", fl.element, fl.failure)),
+                Err(fl) => return fail(it, &residuals, Some(fl.element), fl.to_string()),
             };
             let (rel, _) = self.residual(&mut r);
             residuals.push(rel);
@@ -439,9 +439,7 @@ impl<'m> Solver<'m> {
             }
             if it > 0 {
                 let de: f64 = last_correction.iter().zip(&r).map(|(a, b)| a * b).sum::<f64>().abs();
-                let energy_ok = de <= self.settings.energy_tol * energy0.unwrap_or(1.0);
-                let tol = self.settings.residual_tol;
-                if (rel <= tol && energy_ok) || rel <= 1e-3 * tol || (energy_ok && rel <= 1e3 * tol) {
+                if self.converged(rel, de, energy0.unwrap_or(1.0)) {
                     return (PathAttempt::Converged { iterations: it, residuals, energy, indefinite }, dlam, du);
                 }
                 if it >= 3 && rel > 1e6 * residuals[0].max(1e-12) {

@@ -10,7 +10,7 @@
 use std::time::Instant;
 
 use super::linear::FactorKind;
-use super::newton::{Attempt, Solver};
+use super::newton::{failed, Attempt, Solver};
 use crate::element::NODE_DOFS;
 use crate::model::State;
 
@@ -32,17 +32,10 @@ impl<'m> Solver<'m> {
         let mut indefinite = false;
         let mut energy0: Option<f64> = None;
         let mut mu = 0.0f64;
-        let tol = self.settings.residual_tol;
         self.model.apply_prescribed(state, scales);
-        let failed = |it: usize, residuals: &Vec<f64>, el: Option<usize>, cause: String| Attempt::Failed {
-            iteration: it,
-            residuals: residuals.clone(),
-            worst_element: el,
-            cause,
-        };
         let mut energy = match self.assemble(state, scales, true) {
             Ok(e) => e,
-            Err(f) => return failed(0, &residuals, Some(f.element), format!("element {} failed: {}", f.element, f.failure)),
+            Err(f) => return failed(0, &residuals, Some(f.element), f.to_string()),
         };
         let mut it = 0;
         let mut trials = 0;
@@ -60,8 +53,7 @@ impl<'m> Solver<'m> {
             }
             if it > 0 && !after_rejection {
                 let de = du.iter().zip(&r).map(|(a, b)| a * b).sum::<f64>().abs();
-                let energy_ok = de <= self.settings.energy_tol * energy0.unwrap_or(1.0);
-                if (rel <= tol && energy_ok) || rel <= 1e-3 * tol || (energy_ok && rel <= 1e3 * tol) {
+                if self.converged(rel, de, energy0.unwrap_or(1.0)) {
                     return Attempt::Converged { iterations: it, residuals, indefinite, energy };
                 }
             }
@@ -126,7 +118,7 @@ impl<'m> Solver<'m> {
                 after_rejection = true;
                 if mu > 1e12 {
                     let cause = match trial {
-                        Err(f) => format!("element {} failed: {}", f.element, f.failure),
+                        Err(f) => f.to_string(),
                         Ok(_) => "no shift μ ≤ 1e12 lowers the energy or the residual".into(),
                     };
                     let el = self.worst_element(&r);

@@ -385,12 +385,11 @@ impl<'m> Solver<'m> {
         let mut energy0: Option<f64> = None;
         let mut static_r = vec![0.0; n];
         let co = Coefficients::new(&ds.scheme, dt, ds.mass_damping);
-        let tol = self.settings.residual_tol;
         self.model.apply_prescribed(state, scales);
         let mut energy = match self.assemble(state, scales, true) {
             Ok(e) => e,
             Err(f) => {
-                return TimeStep::Failed { iteration: 0, residuals, worst_element: Some(f.element), cause: format!("element {} failed: {}", f.element, f.failure) };
+                return TimeStep::Failed { iteration: 0, residuals, worst_element: Some(f.element), cause: f.to_string() };
             }
         };
         for it in 0..=ds.max_iterations {
@@ -406,8 +405,7 @@ impl<'m> Solver<'m> {
             }
             if it > 0 {
                 let de = du.iter().zip(&r).map(|(a, b)| a * b).sum::<f64>().abs();
-                let energy_ok = de <= self.settings.energy_tol * energy0.unwrap_or(1.0);
-                if (rel <= tol && energy_ok) || rel <= 1e-3 * tol || (energy_ok && rel <= 1e3 * tol) {
+                if self.converged(rel, de, energy0.unwrap_or(1.0)) {
                     return TimeStep::Converged { iterations: it, residuals, static_residual: static_rel, energy, static_r };
                 }
             }
@@ -431,35 +429,16 @@ impl<'m> Solver<'m> {
             if energy0.is_none() {
                 energy0 = Some(du.iter().zip(&r).map(|(a, b)| a * b).sum::<f64>().abs().max(1e-300));
             }
-            // Safeguarded full step: halve only when the trial state cannot be evaluated — an
-            // element fails, or a nodal-force term finds it inadmissible and writes NaN into
-            // the forces (the `NodalForces::add` convention, e.g. a node carried through a
-            // body): backtracking along the Newton direction keeps the time step.
-            let base = state.clone();
-            let mut step = 1.0;
-            let mut accepted = false;
-            let mut last_failure = None;
-            for _ in 0..6 {
-                *state = base.clone();
-                self.model.update(state, &du, step);
-                match self.assemble(state, scales, true) {
-                    Ok(e) if self.f_ext.iter().all(|v| !v.is_nan()) => {
-                        energy = e;
-                        accepted = true;
-                        break;
-                    }
-                    Ok(_) => last_failure = None,
-                    Err(f) => last_failure = Some(f),
+            // Backtracking along the Newton direction keeps the time step.
+            match self.safeguarded_update(state, &du, scales, true) {
+                Ok(e) => energy = e,
+                Err(failure) => {
+                    let (el, cause) = match failure {
+                        Some(f) => (Some(f.element), f.to_string()),
+                        None => (None, "no admissible trial state along the Newton direction (a nodal-force term, e.g. contact with a node through a body, rejected every backtracked step)".into()),
+                    };
+                    return TimeStep::Failed { iteration: it, residuals, worst_element: el, cause };
                 }
-                step *= 0.5;
-            }
-            if !accepted {
-                *state = base;
-                let (el, cause) = match last_failure {
-                    Some(f) => (Some(f.element), format!("element {} failed: {}", f.element, f.failure)),
-                    None => (None, "no admissible trial state along the Newton direction (a nodal-force term, e.g. contact with a node through a body, rejected every backtracked step)".into()),
-                };
-                return TimeStep::Failed { iteration: it, residuals, worst_element: el, cause };
             }
         }
         let el = self.worst_element(&r);
@@ -494,7 +473,7 @@ impl<'m> Solver<'m> {
     /// [`Solver::internal_force`].
     pub fn static_residual(&mut self, state: &mut State, scales: &[f64]) -> Result<f64, String> {
         self.model.apply_prescribed(state, scales);
-        self.assemble(state, scales, false).map_err(|f| format!("element {} failed: {}", f.element, f.failure))?;
+        self.assemble(state, scales, false).map_err(|f| f.to_string())?;
         let mut r = vec![0.0; self.model.dofs.n_free];
         Ok(self.residual(&mut r).0)
     }
@@ -552,7 +531,7 @@ impl<'m> Solver<'m> {
             // t = 0⁺, the state at rest).
             let first = at(0.0);
             if let Err(f) = self.assemble(state, &first, false) {
-                return Err(error(0, vec![], Some(f.element), format!("element {} failed: {}", f.element, f.failure), 0.0));
+                return Err(error(0, vec![], Some(f.element), f.to_string(), 0.0));
             }
             self.residual(&mut prev.r);
             let eq = &model.dofs.eq;

@@ -165,6 +165,11 @@ pub(super) enum Attempt {
     Failed { iteration: usize, residuals: Vec<f64>, worst_element: Option<usize>, cause: String },
 }
 
+/// A failed attempt at iteration `iteration` with the residual history so far.
+pub(super) fn failed(iteration: usize, residuals: &[f64], worst_element: Option<usize>, cause: String) -> Attempt {
+    Attempt::Failed { iteration, residuals: residuals.to_vec(), worst_element, cause }
+}
+
 /// A static solver bound to one model.
 pub struct Solver<'m> {
     pub(super) model: &'m Model,
@@ -317,6 +322,46 @@ impl<'m> Solver<'m> {
         self.model.elements.iter().position(|el| el.nodes.contains(&node))
     }
 
+    /// Newton convergence test shared by every step kind: both the relative residual `rel`
+    /// and the energy norm `de` = |δu·r| of the last correction (relative to the first, `e0`)
+    /// small; or the residual at its round-off floor (thin shells at large rotation:
+    /// ½(p·q − P·Q) loses digits in proportion to the membrane-to-bending stiffness ratio)
+    /// while the energy norm of the correction is negligible.
+    pub(super) fn converged(&self, rel: f64, de: f64, e0: f64) -> bool {
+        let tol = self.settings.residual_tol;
+        let energy_ok = de <= self.settings.energy_tol * e0;
+        (rel <= tol && energy_ok) || rel <= 1e-3 * tol || (energy_ok && rel <= 1e3 * tol)
+    }
+
+    /// Safeguarded Newton update shared by the static and dynamic steps: `state` += s·`du`
+    /// with s = 1, ½, ¼, … (six tries; one when `backtrack` is false), taking the first
+    /// trial state that can be evaluated — every element assembles and the internal and
+    /// external forces are finite (a nodal-force term writes NaN for an inadmissible state,
+    /// e.g. a node carried through a body). Residual growth alone is no reason to back off:
+    /// large rotations legitimately raise it for an iteration or two, and divergence is
+    /// caught by the iteration limit and the cut-back. Returns the trial state's strain
+    /// energy, or, with `state` restored, the last element failure (None: forces not finite).
+    pub(super) fn safeguarded_update(&mut self, state: &mut State, du: &[f64], scales: &[f64], backtrack: bool) -> Result<f64, Option<AssemblyFailure>> {
+        let base = state.clone();
+        let mut step = 1.0;
+        let mut last_failure = None;
+        for _ in 0..6 {
+            *state = base.clone();
+            self.model.update(state, du, step);
+            match self.assemble(state, scales, true) {
+                Ok(e) if self.f_int.iter().chain(&self.f_ext).all(|v| v.is_finite()) => return Ok(e),
+                Ok(_) => last_failure = None,
+                Err(f) => last_failure = Some(f),
+            }
+            if !backtrack {
+                break;
+            }
+            step *= 0.5;
+        }
+        *state = base;
+        Err(last_failure)
+    }
+
     /// Newton iterations for one increment ending at `scales`, starting from `state`.
     fn attempt(&mut self, state: &mut State, scales: &[f64], linear: bool, progress: &mut dyn FnMut(usize, f64)) -> Attempt {
         let n = self.model.dofs.n_free;
@@ -326,15 +371,9 @@ impl<'m> Solver<'m> {
         let mut indefinite = false;
         let mut energy0 = None;
         self.model.apply_prescribed(state, scales);
-        let fail = |it: usize, residuals: &Vec<f64>, el: Option<usize>, cause: String| Attempt::Failed {
-            iteration: it,
-            residuals: residuals.clone(),
-            worst_element: el,
-            cause,
-        };
         let mut energy = match self.assemble(state, scales, true) {
             Ok(e) => e,
-            Err(f) => return fail(0, &residuals, Some(f.element), format!("element {} failed: {}", f.element, f.failure)),
+            Err(f) => return failed(0, &residuals, Some(f.element), f.to_string()),
         };
         for it in 0..self.settings.max_iterations {
             let (rel, _) = self.residual(&mut r);
@@ -342,27 +381,19 @@ impl<'m> Solver<'m> {
             progress(it, rel);
             if !rel.is_finite() {
                 let el = self.worst_element(&r);
-                return fail(it, &residuals, el, "residual is NaN or infinite".into());
+                return failed(it, &residuals, el, "residual is NaN or infinite".into());
             }
             if it > 0 && linear {
                 return Attempt::Converged { iterations: it, residuals, indefinite, energy };
             }
             if it > 0 {
-                let e0: f64 = energy0.unwrap_or(1.0);
                 let de: f64 = du.iter().zip(&r).map(|(a, b)| a * b).sum::<f64>().abs();
-                // Both norms small; or the residual is at its round-off floor (thin shells at
-                // large rotation: ½(p·q − P·Q) loses digits in proportion to the membrane-to-
-                // bending stiffness ratio) while the energy norm of the correction is negligible.
-                let energy_ok = de <= self.settings.energy_tol * e0;
-                if (rel <= self.settings.residual_tol && energy_ok)
-                    || rel <= 1e-3 * self.settings.residual_tol
-                    || (energy_ok && rel <= 1e3 * self.settings.residual_tol)
-                {
+                if self.converged(rel, de, energy0.unwrap_or(1.0)) {
                     return Attempt::Converged { iterations: it, residuals, indefinite, energy };
                 }
                 if it >= 3 && rel > 1e6 * residuals[0].max(1e-12) {
                     let el = self.worst_element(&r);
-                    return fail(it, &residuals, el, "Newton diverging (residual grew a millionfold)".into());
+                    return failed(it, &residuals, el, "Newton diverging (residual grew a millionfold)".into());
                 }
             }
             // Solve K du = −r.
@@ -371,7 +402,7 @@ impl<'m> Solver<'m> {
                 Ok(k) => k,
                 Err(e) => {
                     self.timings.factorization += t.elapsed().as_secs_f64();
-                    return fail(it, &residuals, None, format!("{e} (a mechanism: missing supports or an unconstrained node?)"));
+                    return failed(it, &residuals, None, format!("{e} (a mechanism: missing supports or an unconstrained node?)"));
                 }
             };
             self.timings.factorization += t.elapsed().as_secs_f64();
@@ -381,54 +412,25 @@ impl<'m> Solver<'m> {
             self.cholesky.solve(&mut du);
             self.timings.solve += t.elapsed().as_secs_f64();
             if du.iter().any(|v| !v.is_finite()) {
-                return fail(it, &residuals, None, "linear solve produced NaN (singular tangent)".into());
+                return failed(it, &residuals, None, "linear solve produced NaN (singular tangent)".into());
             }
             let g0: f64 = du.iter().zip(&r).map(|(a, b)| a * b).sum();
             if energy0.is_none() {
                 energy0 = Some(g0.abs().max(1e-300));
             }
-            // Full Newton step, safeguarded: back off (halving) only when the trial state
-            // fails (element inversion, plane-stress failure, NaN). Residual growth alone is
-            // no reason: large rotations legitimately raise it for an iteration or two, and
-            // divergence is caught by the iteration limit and cut-back.
-            let base = state.clone();
-            let mut step = 1.0;
-            let mut accepted = false;
-            let mut last_failure = None;
-            for _ in 0..6 {
-                *state = base.clone();
-                self.model.update(state, &du, step);
-                match self.assemble(state, scales, true) {
-                    Ok(e) => {
-                        energy = e;
-                        let (rel, _) = self.residual(&mut r);
-                        if rel.is_finite() {
-                            accepted = true;
-                            break;
-                        }
-                    }
-                    Err(f) => last_failure = Some(f),
+            match self.safeguarded_update(state, &du, scales, self.settings.line_search) {
+                Ok(e) => energy = e,
+                Err(Some(f)) => return failed(it, &residuals, Some(f.element), f.to_string()),
+                Err(None) => {
+                    let el = self.worst_element(&r);
+                    return failed(it, &residuals, el, "line search found no finite state".into());
                 }
-                if !self.settings.line_search {
-                    break;
-                }
-                step *= 0.5;
-            }
-            if !accepted {
-                *state = base;
-                return match last_failure {
-                    Some(f) => fail(it, &residuals, Some(f.element), format!("element {} failed: {}", f.element, f.failure)),
-                    None => {
-                        let el = self.worst_element(&r);
-                        fail(it, &residuals, el, "line search found no finite state".into())
-                    }
-                };
             }
         }
         let (rel, _) = self.residual(&mut r);
         residuals.push(rel);
         let el = self.worst_element(&r);
-        fail(self.settings.max_iterations, &residuals, el, format!("no convergence in {} iterations", self.settings.max_iterations))
+        failed(self.settings.max_iterations, &residuals, el, format!("no convergence in {} iterations", self.settings.max_iterations))
     }
 
     /// Runs all steps from `state`. `on_increment` receives each converged nominal increment
