@@ -73,8 +73,10 @@ pub struct Assembler {
     /// elements without tied DOFs (their entries all take the direct path).
     tied: Vec<Vec<(u16, u32, f64)>>,
     /// Elements with a DOF tied by a rigid link (state-dependent weights): their Tᵀ K T
-    /// entries are expanded at every assembly instead of through `tied`.
-    linked: Vec<bool>,
+    /// entries (local entry i·20+j, slot, index of the row's and the column's weight in the
+    /// expansions of local DOFs i and j), weighted at every assembly with the current
+    /// weights instead of through `tied`. Empty for other elements.
+    linked: Vec<Vec<(u16, u32, u8, u8)>>,
 }
 
 
@@ -193,11 +195,11 @@ impl Assembler {
                 t != UNTIED && model.dofs.has_links(t as usize)
             }))
         };
-        let linked: Vec<bool> = model.elements.iter().map(|el| is_tied(el) && is_linked(el)).collect();
+        let linked_flag: Vec<bool> = model.elements.iter().map(|el| is_tied(el) && is_linked(el)).collect();
         let tied = model
             .elements
             .iter()
-            .zip(&linked)
+            .zip(&linked_flag)
             .map(|(el, &lk)| {
                 if !is_tied(el) || lk {
                     return Vec::new();
@@ -225,6 +227,38 @@ impl Assembler {
                 list
             })
             .collect();
+        // The equations of a link-tied expansion do not change with the state (zero weights
+        // are kept), so the slots are found once; only the weights are refreshed.
+        let linked = model
+            .elements
+            .iter()
+            .zip(&linked_flag)
+            .map(|(el, &lk)| {
+                if !lk {
+                    return Vec::new();
+                }
+                let globals: [usize; ELEMENT_DOFS] = std::array::from_fn(|i| NODE_DOFS * el.nodes[i / NODE_DOFS] + i % NODE_DOFS);
+                let exp: Vec<Vec<(usize, f64)>> = globals.iter().map(|&g| model.dofs.expand(g)).collect();
+                let mut list = Vec::new();
+                for i in 0..ELEMENT_DOFS {
+                    for j in 0..ELEMENT_DOFS {
+                        if model.dofs.tie_of[globals[i]] == UNTIED && model.dofs.tie_of[globals[j]] == UNTIED {
+                            continue;
+                        }
+                        for (a, &(r, _)) in exp[i].iter().enumerate() {
+                            for (b, &(c, _)) in exp[j].iter().enumerate() {
+                                if r <= c
+                                    && let Some(s) = slot_of(r, c)
+                                {
+                                    list.push(((i * ELEMENT_DOFS + j) as u16, s, a as u8, b as u8));
+                                }
+                            }
+                        }
+                    }
+                }
+                list
+            })
+            .collect();
         let rules: Vec<Result<SectionRule, ElementFailure>> = model.sections.iter().map(SectionRule::new).collect();
         let geometry = (0..model.elements.len())
             .into_par_iter()
@@ -234,37 +268,6 @@ impl Assembler {
             })
             .collect();
         Self { pattern, slots, rules, geometry, tied, linked }
-    }
-
-    /// Scatters the tied part of element `e`'s stiffness `k` through the current
-    /// (state-dependent) weights of its rigid-link ties: Tᵀ K T for the entries not taken
-    /// by the direct path.
-    fn scatter_linked(&self, model: &Model, e: usize, k: &nalgebra::SMatrix<f64, ELEMENT_DOFS, ELEMENT_DOFS>, v: &mut [f64]) {
-        let nodes = model.elements[e].nodes;
-        let globals: [usize; ELEMENT_DOFS] = std::array::from_fn(|i| NODE_DOFS * nodes[i / NODE_DOFS] + i % NODE_DOFS);
-        let exp: Vec<Vec<(usize, f64)>> = globals.iter().map(|&g| model.dofs.expand(g)).collect();
-        let p = &self.pattern;
-        for i in 0..ELEMENT_DOFS {
-            for j in 0..ELEMENT_DOFS {
-                if model.dofs.tie_of[globals[i]] == UNTIED && model.dofs.tie_of[globals[j]] == UNTIED {
-                    continue;
-                }
-                let kij = k[(i, j)];
-                if kij == 0.0 {
-                    continue;
-                }
-                for &(r, wr) in &exp[i] {
-                    for &(c, wc) in &exp[j] {
-                        if r <= c {
-                            let rows = &p.row_idx[p.col_ptr[c]..p.col_ptr[c + 1]];
-                            if let Ok(q) = rows.binary_search(&r) {
-                                v[p.col_ptr[c] + q] += wr * wc * kij;
-                            }
-                        }
-                    }
-                }
-            }
-        }
     }
 
     /// Number of stored entries of the upper triangle.
@@ -325,8 +328,16 @@ impl Assembler {
                         let ij = ij as usize;
                         v[s as usize] += w * k[(ij / ELEMENT_DOFS, ij % ELEMENT_DOFS)];
                     }
-                    if self.linked[e] {
-                        self.scatter_linked(model, e, k, v);
+                    if !self.linked[e].is_empty() {
+                        let weights: Vec<Vec<f64>> = nodes
+                            .iter()
+                            .flat_map(|&n| (0..NODE_DOFS).map(move |k| NODE_DOFS * n + k))
+                            .map(|g| model.dofs.expand(g).into_iter().map(|(_, w)| w).collect())
+                            .collect();
+                        for &(ij, s, a, b) in &self.linked[e] {
+                            let (i, j) = (ij as usize / ELEMENT_DOFS, ij as usize % ELEMENT_DOFS);
+                            v[s as usize] += weights[i][a as usize] * weights[j][b as usize] * k[(i, j)];
+                        }
                     }
                 }
             }
