@@ -196,6 +196,31 @@ impl Assembler {
             }))
         };
         let linked_flag: Vec<bool> = model.elements.iter().map(|el| is_tied(el) && is_linked(el)).collect();
+        // Entries of an element with tied DOFs, taken through the constraint expansion:
+        // (local entry i·20+j, slot, index a of row equation in exp_i, index b in exp_j,
+        // w_a w_b), for every pair of expanded equations r ≤ c stored in the pattern.
+        let expanded_entries = |el: &crate::model::ElementDef| -> Vec<(u16, u32, u8, u8, f64)> {
+            let globals: [usize; ELEMENT_DOFS] = std::array::from_fn(|i| NODE_DOFS * el.nodes[i / NODE_DOFS] + i % NODE_DOFS);
+            let exp: Vec<Vec<(usize, f64)>> = globals.iter().map(|&g| model.dofs.expand(g)).collect();
+            let mut list = Vec::new();
+            for i in 0..ELEMENT_DOFS {
+                for j in 0..ELEMENT_DOFS {
+                    if model.dofs.tie_of[globals[i]] == UNTIED && model.dofs.tie_of[globals[j]] == UNTIED {
+                        continue;
+                    }
+                    for (a, &(r, wr)) in exp[i].iter().enumerate() {
+                        for (b, &(c, wc)) in exp[j].iter().enumerate() {
+                            if r <= c
+                                && let Some(s) = slot_of(r, c)
+                            {
+                                list.push(((i * ELEMENT_DOFS + j) as u16, s, a as u8, b as u8, wr * wc));
+                            }
+                        }
+                    }
+                }
+            }
+            list
+        };
         let tied = model
             .elements
             .iter()
@@ -204,27 +229,7 @@ impl Assembler {
                 if !is_tied(el) || lk {
                     return Vec::new();
                 }
-                let globals: [usize; ELEMENT_DOFS] = std::array::from_fn(|i| NODE_DOFS * el.nodes[i / NODE_DOFS] + i % NODE_DOFS);
-                let exp: Vec<Vec<(usize, f64)>> = globals.iter().map(|&g| model.dofs.expand(g)).collect();
-                let mut list = Vec::new();
-                for i in 0..ELEMENT_DOFS {
-                    for j in 0..ELEMENT_DOFS {
-                        let direct = model.dofs.tie_of[globals[i]] == UNTIED && model.dofs.tie_of[globals[j]] == UNTIED;
-                        if direct {
-                            continue;
-                        }
-                        for &(r, wr) in &exp[i] {
-                            for &(c, wc) in &exp[j] {
-                                if r <= c
-                                    && let Some(s) = slot_of(r, c)
-                                {
-                                    list.push(((i * ELEMENT_DOFS + j) as u16, s, wr * wc));
-                                }
-                            }
-                        }
-                    }
-                }
-                list
+                expanded_entries(el).into_iter().map(|(ij, s, _, _, w)| (ij, s, w)).collect()
             })
             .collect();
         // The equations of a link-tied expansion do not change with the state (zero weights
@@ -237,26 +242,7 @@ impl Assembler {
                 if !lk {
                     return Vec::new();
                 }
-                let globals: [usize; ELEMENT_DOFS] = std::array::from_fn(|i| NODE_DOFS * el.nodes[i / NODE_DOFS] + i % NODE_DOFS);
-                let exp: Vec<Vec<(usize, f64)>> = globals.iter().map(|&g| model.dofs.expand(g)).collect();
-                let mut list = Vec::new();
-                for i in 0..ELEMENT_DOFS {
-                    for j in 0..ELEMENT_DOFS {
-                        if model.dofs.tie_of[globals[i]] == UNTIED && model.dofs.tie_of[globals[j]] == UNTIED {
-                            continue;
-                        }
-                        for (a, &(r, _)) in exp[i].iter().enumerate() {
-                            for (b, &(c, _)) in exp[j].iter().enumerate() {
-                                if r <= c
-                                    && let Some(s) = slot_of(r, c)
-                                {
-                                    list.push(((i * ELEMENT_DOFS + j) as u16, s, a as u8, b as u8));
-                                }
-                            }
-                        }
-                    }
-                }
-                list
+                expanded_entries(el).into_iter().map(|(ij, s, a, b, _)| (ij, s, a, b)).collect()
             })
             .collect();
         let rules: Vec<Result<SectionRule, ElementFailure>> = model.sections.iter().map(SectionRule::new).collect();
