@@ -20,9 +20,13 @@
 //! σ = ±1 the side of the master the slave lies on in the reference (the ply order): a node
 //! that has crossed is pushed back, not pulled through. The variation is
 //! δg = ν·(δx_s − Σ λ_j δx_j) with ν the unit direction (exact for the closest point), so
-//! the penalty law λ_N = k_n⟨−g⟩ gives the force λ_N ν on the slave and −λ_j λ_N ν on master
-//! node j: action equals reaction, the forces sum to zero. Pairs at g = 0 (plies laid on
-//! each other) keep the penalty stiffness with zero force.
+//! the penalty law λ_N(g) gives the force λ_N ν on the slave and −λ_j λ_N ν on master
+//! node j: action equals reaction, the forces sum to zero. λ_N is the penalty k_n⟨−g⟩
+//! made C¹ by a quadratic ramp over the first ε = 0.02 c of penetration (k_n g²/(2ε) for
+//! −ε < g < 0, k_n(−g − ε/2) beyond), so that force and stiffness are continuous at first
+//! contact (with the kink Newton 2-cycled on pairs at g ≈ 0). A slave node whose closest
+//! point lies on the master ply's free edge (it overhangs the edge) is measured against the
+//! plane of that boundary facet, whose side is defined, up to half an element past the edge.
 //!
 //! Friction: the slip is measured against the master's material point x̂ = Σ N̂_j x_j where
 //! the slave stuck (anchor: a master triangle and fixed barycentric coordinates N̂, so the
@@ -62,11 +66,12 @@ use crate::solver::NodalForces;
 /// A pair counts as sliding when k_t|s| > 2μλ_N (the friction force exceeds tanh 2 = 96 %
 /// of μλ_N), as for rigid bodies.
 const SLIDE_ARG: f64 = 2.0;
-/// Pairs whose gap is positive but at most this fraction of the contact distance are near
-/// contact: no force, but the penalty stiffness stays in the tangent (a quasi-Newton term
-/// whose fixed point is unchanged), so a Newton step does not carry a soft ply that just
-/// separated, or one laid on another (g = 0), through its neighbour before contact sees it.
-const NEAR: f64 = 1e-9;
+/// Regularisation depth ε of the normal law, as a fraction of the contact distance c: the
+/// penalty force is smoothed by a quadratic ramp over −ε < g < 0 (`pair_forces`), so force and
+/// stiffness are continuous at first contact. With the plain kink ⟨−g⟩ Newton 2-cycled on a
+/// pair lying at g ≈ 0 (active: the stiff step lifts it just clear; inactive: no stiffness,
+/// it falls back in), so a draped three-ply strip never got past first contact.
+const EPS_FRAC: f64 = 0.02;
 /// Smallest elastic slip of the regularised friction law, as a fraction of the element size:
 /// plies pressed together only by their weight carry normal forces so small that μλ_N/k_t
 /// would be nanometres, and Newton would chatter between the two slip directions.
@@ -182,6 +187,23 @@ struct Surface {
     membrane: f64,
     /// Half-thickness of the ply.
     half: f64,
+    /// Edges (node pairs, smaller first) of the ply's boundary: quad sides of one element.
+    boundary: std::collections::BTreeSet<(usize, usize)>,
+}
+
+impl Surface {
+    /// Whether the closest-point feature of triangle `tri` with barycentric coordinates
+    /// `bary` (zero coordinates: the point lies on an edge or at a vertex) lies on the
+    /// ply's free boundary.
+    fn on_boundary(&self, tri: usize, bary: &[f64; 3]) -> bool {
+        let t = self.tris[tri];
+        let f: Vec<usize> = (0..3).filter(|&j| bary[j] > 0.0).map(|j| t[j]).collect();
+        match f[..] {
+            [a, b] => self.boundary.contains(&(a.min(b), a.max(b))),
+            [a] => self.boundary.iter().any(|&(p, q)| p == a || q == a),
+            _ => false,
+        }
+    }
 }
 
 /// One slave node against one master surface.
@@ -323,7 +345,15 @@ impl InterplyContact {
                         let sec = &model.sections[d.section];
                         (m.max(sec.material.small_strain_moduli().0 * sec.thickness), h.max(0.5 * sec.thickness))
                     });
-                    surfaces.push(Surface { part: p, tris, membrane, half });
+                    let mut count = std::collections::BTreeMap::new();
+                    for d in els {
+                        for k in 0..4 {
+                            let (a, b) = (d.nodes[k], d.nodes[(k + 1) % 4]);
+                            *count.entry((a.min(b), a.max(b))).or_insert(0usize) += 1;
+                        }
+                    }
+                    let boundary = count.into_iter().filter(|&(_, c)| c == 1).map(|(e, _)| e).collect();
+                    surfaces.push(Surface { part: p, tris, membrane, half, boundary });
                     surfaces.len() - 1
                 });
             }
@@ -409,15 +439,32 @@ impl InterplyContact {
             .zip(&projections)
             .map(|((r, h), p)| {
                 let Some((tri, bary, d)) = *p else { return (Eval::default(), None) };
-                let gap = r.side * d - r.offset;
+                let s = &self.surfaces[r.surface];
+                // A node whose closest point is on the master ply's free edge overhangs it
+                // (a ply's end row lies over its neighbour's): the sign of n·(x_s − x_c) there
+                // flips as the node swings past the edge's plane, and with it the gap by
+                // 2|x_s − x_c| (the force jumped, Newton cycled). Such a node is measured
+                // against the plane of the boundary facet instead (the facet's gap extended
+                // past its edge, continuous with the interior one), up to half an element
+                // beyond the edge.
+                let plane = s.on_boundary(tri, &bary);
+                let gap = if plane {
+                    let p = s.tris[tri].map(x);
+                    let Some((lam, n)) = project(&p, &x(r.node)) else { return (Eval::default(), None) };
+                    if lam.iter().any(|&l| l < -0.5) {
+                        return (Eval::default(), None);
+                    }
+                    r.side * n.dot(&(x(r.node) - p[0])) - r.offset
+                } else {
+                    r.side * d - r.offset
+                };
                 // Beyond the depth limit the master is a distant part of the ply (a fold), not
                 // the surface this node is pressed against.
-                if gap > NEAR * r.offset || gap < -(2.0 * r.offset + 0.5 * r.size) {
+                if gap >= 0.0 || gap < -(2.0 * r.offset + 0.5 * r.size) {
                     return (Eval { proj: Some((tri, bary)), gap, ..Default::default() }, None);
                 }
-                let s = &self.surfaces[r.surface];
                 let anchor = h.anchor.map(|(t, n)| (s.tris[t], n));
-                let (ev, pf) = pair_forces(r, s.tris[tri], bary, anchor, &x, mu, tf * r.k_n, with_tangent);
+                let (ev, pf) = pair_forces(r, s.tris[tri], bary, plane, anchor, &x, mu, tf * r.k_n, with_tangent);
                 (Eval { proj: Some((tri, bary)), ..ev }, Some(pf))
             })
             .collect()
@@ -489,12 +536,14 @@ fn closest_point_barycentric(p: &[Vector3<f64>; 3], y: &Vector3<f64>) -> [f64; 3
 }
 
 /// Normal and friction forces of an active record, slave at node `r.node`, projection
-/// triangle `tri`, anchor (triangle nodes, barycentric coordinates) if any; `kt` the
+/// triangle `tri` (`plane`: measured against the facet's plane, a node overhanging the
+/// master's free edge), anchor (triangle nodes, barycentric coordinates) if any; `kt` the
 /// tangential penalty. Forces and Jacobian through dual numbers (see the module doc).
 fn pair_forces(
     r: &Record,
     tri: [usize; 3],
     bary: [f64; 3],
+    plane: bool,
     anchor: Option<([usize; 3], [f64; 3])>,
     x: &dyn Fn(usize) -> Vector3<f64>,
     mu: f64,
@@ -527,7 +576,7 @@ fn pair_forces(
     let m = cross(&e1, &e2);
     let n_facet = scale(&m, D::c(1.0) / dot(&m, &m).sqrt());
     let mut lam = [D::c(0.0); 3];
-    let (n, gap) = if feature.len() == 3 {
+    let (n, gap) = if feature.len() == 3 || plane {
         let rv = sub(&xs, &xt[0]);
         let (a11, a12, a22) = (dot(&e1, &e1), dot(&e1, &e2), dot(&e2, &e2));
         let (b1, b2) = (dot(&rv, &e1), dot(&rv, &e2));
@@ -555,9 +604,12 @@ fn pair_forces(
         // Unit direction from x_c to the slave, on the slave's side.
         (scale(&v, D::c(sign * r.side) / dist), dist * sign - D::c(r.offset))
     };
-    // λ_N = k_n⟨−g⟩; a pair near contact (0 < g ≤ NEAR·offset) carries no force but keeps
-    // the penalty stiffness in the tangent.
-    let lambda_n = (gap - D::c(gap.v.max(0.0))) * (-r.k_n);
+    // C¹-regularised penalty (a quadratic ramp over the first ε of penetration, cf. the
+    // smoothed penalty of Wriggers 2006 §5.2): λ_N = 0 for g ≥ 0, k_n g²/(2ε) for −ε < g < 0,
+    // k_n(−g − ε/2) for g ≤ −ε — continuous with its derivative −k_n·min(1, −g/ε), and zero
+    // at g = 0, where plies laid on each other start.
+    let eps = EPS_FRAC * r.offset;
+    let lambda_n = if gap.v <= -eps { (D::c(-0.5 * eps) - gap) * r.k_n } else { gap * gap * (0.5 * r.k_n / eps) };
     let fn_s = scale(&n, lambda_n * r.side);
     f[0] = add(&f[0], &fn_s);
     for j in 0..3 {
@@ -913,21 +965,23 @@ mod tests {
         Vector3::new(f[NODE_DOFS * a], f[NODE_DOFS * a + 1], f[NODE_DOFS * a + 2])
     }
 
-    /// Penalty law (module doc): slave node 4 (at (0.03, 0.04)) pushed δ into the master's
-    /// face gets k_n δ along +z, the master nodes −λ_j k_n δ with λ the barycentric
+    /// Penalty law (module doc): slave node 4 (at (0.03, 0.04)) pushed δ ≥ ε into the
+    /// master's face gets k_n(δ − ε/2) along +z (the regularised law beyond its ramp), the master nodes −λ_j k_n δ with λ the barycentric
     /// coordinates of its projection in the master triangle under it; the sum is zero.
     #[test]
     fn one_node_against_one_element_follows_the_penalty_law() {
         let b = pair();
         let model = &b.model;
         let mut c = InterplyContact::new(model, &setup(0.0));
-        let delta = 2e-5;
+        let delta = 5e-5;
         let mut st = model.initial_state();
         st.u[4].z = -(CLEAR + delta);
         let (f, _) = forces_and_jacobian(&mut c, model, &st, &(0..8).collect::<Vec<_>>());
         let k = c.records.iter().find(|r| r.node == 4).unwrap().k_n;
         // Automatic penalty: A·a/ℓ² = E h for a node of a single square element.
         assert!((k - 1.0e6 * H * 0.25).abs() < 1e-9 * k, "k_n {k}");
+        // Effective penetration beyond the ramp: δ − ε/2, ε = EPS_FRAC·H (H the contact distance).
+        let delta = delta - 0.5 * EPS_FRAC * H;
         let fs = force(&f, 4);
         assert!((fs - Vector3::new(0.0, 0.0, k * delta)).norm() < 1e-9 * k * delta, "slave force {fs}");
         // (0.3, 0.4) of the unit square (scaled 0.1) lies in the triangle of corners
