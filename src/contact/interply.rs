@@ -231,6 +231,9 @@ struct History {
     active: bool,
     sliding: bool,
     slip: f64,
+    /// Normal force λ̄ and unit normal n̄ of the last converged state (0 when out of
+    /// contact there): the lagged friction bound and tangent plane.
+    lagged: (f64, Vector3<f64>),
 }
 
 /// Evaluation of a record at a configuration.
@@ -241,6 +244,8 @@ struct Eval {
     gap: f64,
     lambda: f64,
     tangential: Vector3<f64>,
+    /// Unit contact direction on the slave.
+    normal: Vector3<f64>,
     active: bool,
     sliding: bool,
 }
@@ -464,7 +469,7 @@ impl InterplyContact {
                     return (Eval { proj: Some((tri, bary)), gap, ..Default::default() }, None);
                 }
                 let anchor = h.anchor.map(|(t, n)| (s.tris[t], n));
-                let (ev, pf) = pair_forces(r, s.tris[tri], bary, plane, anchor, &x, mu, tf * r.k_n, with_tangent);
+                let (ev, pf) = pair_forces(r, s.tris[tri], bary, plane, anchor, h.lagged, &x, mu, tf * r.k_n, with_tangent);
                 (Eval { proj: Some((tri, bary)), ..ev }, Some(pf))
             })
             .collect()
@@ -545,6 +550,7 @@ fn pair_forces(
     bary: [f64; 3],
     plane: bool,
     anchor: Option<([usize; 3], [f64; 3])>,
+    lagged: (f64, Vector3<f64>),
     x: &dyn Fn(usize) -> Vector3<f64>,
     mu: f64,
     kt: f64,
@@ -615,7 +621,8 @@ fn pair_forces(
     for j in 0..3 {
         f[ti[j]] = sub(&f[ti[j]], &scale(&fn_s, lam[j]));
     }
-    let mut ev = Eval { gap: gap.v, lambda: lambda_n.v, active: gap.v < 0.0, ..Default::default() };
+    let normal = Vector3::new(n[0].v, n[1].v, n[2].v) * r.side;
+    let mut ev = Eval { gap: gap.v, lambda: lambda_n.v, normal, active: gap.v < 0.0, ..Default::default() };
     // Friction against the anchor (the master's material point where the slave stuck).
     if let (Some((_, nh)), Some(ai)) = (anchor, ai)
         && mu > 0.0
@@ -623,9 +630,14 @@ fn pair_forces(
     {
         let xa = (0..3).fold([D::c(0.0); 3], |acc, j| add(&acc, &scale(&var(ai[j]), D::c(nh[j]))));
         let dv = sub(&xs, &xa);
-        let s = sub(&dv, &scale(&n, dot(&n, &dv)));
+        // Lagged friction (as in `mechanics.rs`; Li et al. 2020 §5): a pair in contact at the
+        // last converged state measures the slip in that state's tangent plane n̄ and bounds
+        // it by μλ̄, so the friction force is the gradient of a potential of the slip and its
+        // Jacobian is symmetric; a pair just coming into contact uses the current ones.
+        let (lam_f, nf) = if lagged.0 > 0.0 { (lagged.0, std::array::from_fn(|k| D::c(lagged.1[k] * r.side))) } else { (lambda_n.v, n) };
+        let s = sub(&dv, &scale(&nf, dot(&nf, &dv)));
         let sn = dot(&s, &s).sqrt();
-        let cap = mu * lambda_n.v;
+        let cap = mu * lam_f;
         // Elastic slip range μλ/k_t, at least SLIP_MIN of the element size.
         let kt = kt.min(cap / (SLIP_MIN * r.size));
         let arg = kt * sn.v / cap;
@@ -719,10 +731,12 @@ impl NodalForces for InterplyContact {
                 }
                 h.sliding = ev.sliding;
                 h.active = true;
+                h.lagged = (ev.lambda, ev.normal);
             } else {
                 rep.released += usize::from(h.active);
                 h.active = false;
                 h.sliding = false;
+                h.lagged = (0.0, Vector3::zeros());
                 // Out of contact: the anchor follows the projection, so friction counts the
                 // slip from the last converged state once the node touches.
                 h.anchor = ev.proj.or(h.anchor);
