@@ -544,6 +544,7 @@ fn closest_point_barycentric(p: &[Vector3<f64>; 3], y: &Vector3<f64>) -> [f64; 3
 /// triangle `tri` (`plane`: measured against the facet's plane, a node overhanging the
 /// master's free edge), anchor (triangle nodes, barycentric coordinates) if any; `kt` the
 /// tangential penalty. Forces and Jacobian through dual numbers (see the module doc).
+#[allow(clippy::too_many_arguments)] // the pair's geometry, history and law, all distinct
 fn pair_forces(
     r: &Record,
     tri: [usize; 3],
