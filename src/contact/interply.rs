@@ -483,6 +483,11 @@ impl InterplyContact {
 /// side of the triangle's plane).
 fn closest(s: &Surface, bvh: &Bvh, x: &dyn Fn(usize) -> Vector3<f64>, y: &Vector3<f64>, reach: f64) -> Option<(usize, [f64; 3], f64)> {
     let q = Aabb::new(pv(&y.add_scalar(-reach)), pv(&y.add_scalar(reach)));
+    // Ties (a closest point at a vertex or on an edge shared by several triangles) go to
+    // the lowest triangle index, not to the BVH's visiting order, which a perturbation of the
+    // nodes reorders: the choice, and with it the facet a boundary node is measured against,
+    // is then a function of the configuration.
+    let tie = 1e-12 * reach;
     let mut best: Option<(f64, usize)> = None;
     for leaf in bvh.intersect_aabb(&q) {
         let t = leaf as usize;
@@ -490,7 +495,7 @@ fn closest(s: &Surface, bvh: &Bvh, x: &dyn Fn(usize) -> Vector3<f64>, y: &Vector
         let tri = Triangle::new(pv(&p[0]), pv(&p[1]), pv(&p[2]));
         let proj = tri.project_local_point(pv(y), true);
         let d = (proj.point - pv(y)).length();
-        if d <= reach && best.is_none_or(|(bd, _)| d < bd) {
+        if d <= reach && best.is_none_or(|(bd, bt)| d < bd - tie || (d <= bd + tie && t < bt)) {
             best = Some((d, t));
         }
     }
