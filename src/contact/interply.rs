@@ -205,6 +205,19 @@ impl Surface {
             _ => false,
         }
     }
+
+    /// Distance of the node at `y` from the master ply, positive on side `side` — `d` (the
+    /// signed closest-point distance from triangle `tri`, barycentric coordinates `bary`)
+    /// inside the ply; for a node whose closest point lies on the free boundary, its distance
+    /// from the plane of that facet, or `None` more than half an element past the edge.
+    fn distance(&self, tri: usize, bary: &[f64; 3], d: f64, side: f64, x: &dyn Fn(usize) -> Vector3<f64>, y: &Vector3<f64>) -> Option<f64> {
+        if !self.on_boundary(tri, bary) {
+            return Some(side * d);
+        }
+        let p = self.tris[tri].map(x);
+        let (lam, n) = project(&p, y)?;
+        (lam.iter().all(|&l| l >= -0.5)).then(|| side * n.dot(&(y - p[0])))
+    }
 }
 
 /// One slave node against one master surface.
@@ -385,9 +398,11 @@ impl InterplyContact {
                         continue;
                     }
                     // Facets of a curved ply lie on chords: a reference mid-surface distance
-                    // below the half-thicknesses is taken as the contact distance (a
-                    // stress-free reference, no initial penetration).
-                    let offset = offset.min(d.abs());
+                    // below the half-thicknesses (measured as `evaluate` measures it, against
+                    // the facet's plane for a node over the free edge) is taken as the
+                    // contact distance (a stress-free reference, no initial penetration).
+                    let Some(distance) = master.distance(tri, &bary, d, d.signum(), &x0, &model.x0[a]) else { continue };
+                    let offset = offset.min(distance);
                     let k_n = setup.settings.penalty.unwrap_or_else(|| setup.settings.penalty_factor * surfaces[ss].membrane.min(master.membrane) * area[a] / (size * size));
                     records.push(Record { node: a, surface: ms, side: d.signum(), offset, k_n, area: area[a], size });
                     history.push(History { anchor: Some((tri, bary)), ..Default::default() });
@@ -454,16 +469,8 @@ impl InterplyContact {
                 // past its edge, continuous with the interior one), up to half an element
                 // beyond the edge.
                 let plane = s.on_boundary(tri, &bary);
-                let gap = if plane {
-                    let p = s.tris[tri].map(x);
-                    let Some((lam, n)) = project(&p, &x(r.node)) else { return (Eval::default(), None) };
-                    if lam.iter().any(|&l| l < -0.5) {
-                        return (Eval::default(), None);
-                    }
-                    r.side * n.dot(&(x(r.node) - p[0])) - r.offset
-                } else {
-                    r.side * d - r.offset
-                };
+                let Some(distance) = s.distance(tri, &bary, d, r.side, &x, &x(r.node)) else { return (Eval::default(), None) };
+                let gap = distance - r.offset;
                 // Beyond the depth limit the master is a distant part of the ply (a fold), not
                 // the surface this node is pressed against.
                 if gap >= 0.0 || gap < -(2.0 * r.offset + 0.5 * r.size) {
