@@ -192,3 +192,99 @@ fn stitching_stiffens_plies_that_contact_keeps_apart() {
     assert!(quilted.tip.abs() >= bonded.tip.abs() * (1.0 - 1e-6));
     assert!(quilted.penetration < 0.05 * T, "quilted ply penetration {} m", quilted.penetration);
 }
+
+/// The issue's multi-ply must-show: a three-ply strip (outer ripstop 0.35 mm, polyester
+/// faille 0.30 mm, knit liner 0.60 mm — the `fabric.rs` presets and their areal densities;
+/// 30 cm × 5 cm, 1 cm elements, plies free: not joined anywhere) dropped flat onto a rigid
+/// horizontal cylinder (radius 5 cm, friction 0.3) under gravity in a damped Dynamic step,
+/// bends over it and comes to rest. Checked independently of the contact code with parry3d:
+/// every node of ply k lies on its side of ply k±1's deformed surface at least the thickness
+/// offset (h_k + h_{k±1})/2 apart up to 5 % of the thinner ply's thickness (the issue's
+/// bound), no ply face is inside the cylinder by more than 5 % of its thickness, and at rest
+/// the cylinder carries the strip's weight Σρ_k g A (static equilibrium, 2 %, as
+/// tests/sleeve_on_arm.rs).
+#[test]
+fn three_ply_strip_bent_over_a_cylinder_keeps_its_plies_apart() {
+    const R: f64 = 0.05;
+    const HS: [f64; 3] = [0.00035, 0.0003, 0.0006];
+    const RHOS: [f64; 3] = [0.2, 0.15, 0.15];
+    let text = format!(
+        r#"Scene(
+    name: "three_ply_drape",
+    materials: {{"shell": Fabric((preset: Some("ripstop"))), "carbon": Fabric((preset: Some("polyester_faille"))), "liner": Fabric((preset: Some("knit_liner")))}},
+    parts: [],
+    garment: Some((
+        element_size: 0.01,
+        plies: {{"outer": (material: "shell", thickness: {h0}, areal_density: {r0}), "carbon": (material: "carbon", thickness: {h1}, areal_density: {r1}), "liner": (material: "liner", thickness: {h2}, areal_density: {r2})}},
+        panels: [(name: "strip", outline: [(0.0, 0.0), (0.3, 0.0), (0.3, 0.05), (0.0, 0.05)],
+                  edges: {{"left": (from: 3, to: 0), "right": (from: 1, to: 2)}},
+                  grain: (1.0, 0.0), plies: ["outer", "carbon", "liner"],
+                  placement: Rigid(translation: (-0.15, -0.025, 0.050626)))],
+        interply: (enabled: true),
+    )),
+    loads: {{"g1": SelfWeight(part: "strip/outer", g: (0.0, 0.0, -{G})), "g2": SelfWeight(part: "strip/carbon", g: (0.0, 0.0, -{G})), "g3": SelfWeight(part: "strip/liner", g: (0.0, 0.0, -{G}))}},
+    steps: [(name: "drape", increments: 1, scale: {{"g1": 1.0, "g2": 1.0, "g3": 1.0}},
+             kind: Dynamic((dt: 4.0e-3, dt_max: 0.05, mass_damping: 30.0, max_steps: 3000)))],
+    contact: Some((
+        bodies: [(name: "cylinder", shape: Cylinder(radius: {R}, height: 0.2), rotation: (90.0, 0.0, 0.0), friction: 0.3)],
+        penalty_factor: 0.1,
+    )),
+    output: (vtu: false),
+)"#,
+        h0 = HS[0],
+        h1 = HS[1],
+        h2 = HS[2],
+        r0 = RHOS[0],
+        r1 = RHOS[1],
+        r2 = RHOS[2],
+    );
+    let sc = scene::parse("three_ply.ron", &text).unwrap_or_else(|e| panic!("{e}"));
+    let built = scene::build(&sc, "three_ply.ron", &text).unwrap_or_else(|e| panic!("{e}"));
+    let model = &built.model;
+    let t = std::time::Instant::now();
+    let mut solver = Solver::new(model, sc.solver.clone()).expect("solver");
+    plyshell::contact::attach(&mut solver, model, built.contact.as_ref().expect("contact"));
+    plyshell::contact::interply::attach(&mut solver, model, built.interply.as_ref().expect("interply"));
+    let mut state = model.initial_state();
+    let mut reports = Vec::new();
+    solver.run(&built.steps, &mut state, &mut |r, _, _| reports.push(r.clone()), &mut |_| {}).unwrap_or_else(|e| panic!("{e}"));
+    let seconds = t.elapsed().as_secs_f64();
+    let iterations: usize = reports.iter().map(|r| r.iterations).sum();
+    let parts: Vec<usize> = ["strip/outer", "strip/carbon", "strip/liner"].iter().map(|n| model.parts.iter().position(|p| p.name == *n).expect("ply part")).collect();
+    // Both directions: nodes of ply k+1 against ply k, and of ply k against ply k+1.
+    let down = ply_penetration(model, &state, &parts);
+    let reversed: Vec<usize> = parts.iter().rev().copied().collect();
+    let up = ply_penetration(model, &state, &reversed);
+    let pen = down.max(up);
+    let h_min = HS.iter().copied().fold(f64::INFINITY, f64::min);
+    // The cylinder (axis along global y = parry's local y), each ply's face at h_k/2.
+    let cyl = parry3d_f64::shape::Cylinder::new(0.1, R);
+    let mut body_pen = f64::NEG_INFINITY;
+    for (k, &p) in parts.iter().enumerate() {
+        let info = &model.parts[p];
+        for a in info.first_node..info.first_node + info.n_nodes {
+            let x = model.position(&state, a);
+            let q = PVec::new(x.x, x.y, x.z);
+            let proj = cyl.project_local_point(q, false);
+            let d = (q - proj.point).length();
+            let signed = if proj.is_inside { -d } else { d };
+            body_pen = body_pen.max((0.5 * HS[k] - signed) / HS[k]);
+        }
+    }
+    let last = reports.last().expect("increments");
+    let lift = last.extra.iter().rev().find_map(|v| v.get("contact").cloned()).expect("contact report")["resultant"][2].as_f64().expect("resultant");
+    let weight: f64 = RHOS.iter().map(|r| r * G * 0.3 * 0.05).sum();
+    println!(
+        "three-ply drape: {} DOFs, {} time steps, {iterations} Newton iterations, {seconds:.1} s (inter-ply search {:.2} s, pattern growths {}); ply penetration {pen:.3e} m = {:.2} % of the thinnest ply (ply k+1 on k {down:.3e}, k on k+1 {up:.3e}); cylinder penetration {:.2} % of h; reaction {lift:.6e} N vs weight {weight:.6e} N ({:+.3} %)",
+        model.dofs.n_free,
+        reports.len(),
+        solver.timings.contact_search,
+        solver.timings.pattern_growths,
+        100.0 * pen / h_min,
+        100.0 * body_pen,
+        100.0 * (lift / weight - 1.0)
+    );
+    assert!(pen < 0.05 * h_min, "ply penetration {pen} m");
+    assert!(body_pen < 0.05, "cylinder penetration {body_pen} of h");
+    assert!((lift / weight - 1.0).abs() < 0.02, "reaction {lift} vs weight {weight}");
+}
