@@ -188,7 +188,8 @@ struct Surface {
     membrane: f64,
     /// Half-thickness of the ply.
     half: f64,
-    /// Edges (node pairs, smaller first) of the ply's boundary: quad sides of one element.
+    /// Edges (node pairs, smaller first) of the ply's free boundary: quad sides of one
+    /// element that are not sewn (both ends tied).
     boundary: std::collections::BTreeSet<(usize, usize)>,
 }
 
@@ -352,6 +353,15 @@ impl InterplyContact {
                 el_count[a] += 1;
             }
         }
+        // Nodes joined to others by a tie (seams, stitch lines): a boundary edge between two
+        // of them is sewn to a partner edge, not a free edge of the ply.
+        let tied: std::collections::BTreeSet<usize> = model
+            .dofs
+            .ties
+            .iter()
+            .filter(|t| t.slave % NODE_DOFS < 3)
+            .flat_map(|t| std::iter::once(t.slave / NODE_DOFS).chain(t.masters.iter().map(|&(m, _)| m / NODE_DOFS)))
+            .collect();
         let mut surface_of_part = std::collections::BTreeMap::new();
         let mut surfaces: Vec<Surface> = Vec::new();
         for &(pa, pb) in &setup.ply_pairs {
@@ -371,7 +381,7 @@ impl InterplyContact {
                             *count.entry((a.min(b), a.max(b))).or_insert(0usize) += 1;
                         }
                     }
-                    let boundary = count.into_iter().filter(|&(_, c)| c == 1).map(|(e, _)| e).collect();
+                    let boundary = count.into_iter().filter(|&((a, b), c)| c == 1 && !(tied.contains(&a) && tied.contains(&b))).map(|(e, _)| e).collect();
                     surfaces.push(Surface { part: p, tris, membrane, half, boundary });
                     surfaces.len() - 1
                 });
