@@ -118,8 +118,13 @@ pub struct InterplySetup {
 #[serde(default, deny_unknown_fields)]
 pub struct InterplySpec {
     /// Contact between adjacent plies of every multi-ply panel. Default off for now: the
-    /// static hanging NBC sleeve (`garments/nbc_sleeve.ron`, soft carbon ply between
-    /// quilting lines) does not converge with it in a Static step; drapes in Dynamic steps do.
+    /// hanging NBC sleeve (`garments/nbc_sleeve.ron`, three plies rolled on a cylinder with
+    /// 19 facets round) does not converge with it, in a Static or a Dynamic step. A liner node
+    /// inside the faceted carbon cylinder (the concave side) projects into two neighbouring
+    /// facets at nearly equal distance; its closest facet, and with it the force direction,
+    /// switches by the 19° between their normals, and Newton 2-cycles. Flat or gently bent
+    /// plies (`tests/interply.rs`) are unaffected. The cure is a smooth normal field
+    /// (interpolated nodal normals) for the master surface.
     pub enabled: bool,
     /// Penalty factor c in k_n = c·min(A_s, A_m)·a/ℓ² (default 1).
     pub penalty_factor: f64,
