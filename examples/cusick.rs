@@ -69,6 +69,9 @@ fn main() -> Result<(), String> {
         "dc": d.get("drape_coefficient_percent"), "folds": d.get("folds"), "harmonic": d.get("dominant_harmonic"),
         "max_penetration": d.get("max_penetration"),
         "final_kinetic_energy": summary.increments.last().and_then(|r| r.dynamics.as_ref()).map(|d| d.kinetic_energy),
+        "unstable_rests": summary.increments.last().and_then(|r| r.dynamics.as_ref()).map(|d| d.unstable_rests),
+        "saddle_escapes": summary.increments.last().and_then(|r| r.dynamics.as_ref()).map(|d| d.saddle_escapes),
+        "saddles": summary.increments.iter().filter_map(|r| r.dynamics.as_ref().and_then(|d| d.saddle.map(|s| (d.time, s.0, s.1)))).collect::<Vec<_>>(),
     });
     println!("{line}");
     Ok(())
