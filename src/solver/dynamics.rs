@@ -477,11 +477,22 @@ impl<'m> Solver<'m> {
         }
     }
 
+    /// Static tangent at `state` for the stability test: the nodal-force terms report their
+    /// stability tangent ([`super::NodalForces::stability_tangent`]: an augmented-Lagrangian
+    /// contact, whose Uzawa fixed point enforces the gap exactly, in its constraint limit).
+    fn assemble_stability_tangent(&mut self, state: &State, scales: &[f64]) -> bool {
+        self.nodal_forces.iter_mut().for_each(|f| f.stability_tangent(true));
+        let ok = self.assemble(state, scales, true).is_ok();
+        self.nodal_forces.iter_mut().for_each(|f| f.stability_tangent(false));
+        ok
+    }
+
     /// Whether `state` is a stable equilibrium candidate: K + 1e-10·diag|K| (static tangent
-    /// at load scales `scales`) is positive definite (Lyapunov/Dirichlet: a strict minimum
-    /// of the potential energy).
+    /// at load scales `scales`, constraints in their limit, see
+    /// [`Solver::assemble_stability_tangent`]) is positive definite (Lyapunov/Dirichlet: a
+    /// strict minimum of the potential energy).
     fn stable(&mut self, state: &State, scales: &[f64]) -> bool {
-        if self.assemble(state, scales, true).is_err() {
+        if !self.assemble_stability_tangent(state, scales) {
             return false;
         }
         let col_ptr = &self.assembler.pattern.col_ptr;
@@ -495,13 +506,15 @@ impl<'m> Solver<'m> {
         matches!(kind, Ok(FactorKind::Llt))
     }
 
-    /// Lowest eigenpair (ω², φ) of K φ = ω² M φ with K the static tangent assembled at
-    /// `state` and M the diagonal `mdiag` over the free equations, when ω² < 0: the shift c of
+    /// Lowest eigenpair (ω², φ) of K φ = ω² M φ with K the static tangent of the stability
+    /// test assembled at `state` and M the diagonal `mdiag` over the free equations, when ω² < 0: the shift c of
     /// K + c M is bracketed by Cholesky success (LLᵀ exists iff c > −ω²_min) to 1 %, then
     /// inverse iteration x ← (K + c M)⁻¹ M x, M-normalised, converges to φ at the rate
     /// (ω²_min + c)/(ω²_2 + c) per iteration; ω² is the Rayleigh quotient φ·Kφ (φ·Mφ = 1).
     fn lowest_mode(&mut self, state: &State, scales: &[f64], mdiag: &[f64]) -> Option<(f64, Vec<f64>)> {
-        self.assemble(state, scales, true).ok()?;
+        if !self.assemble_stability_tangent(state, scales) {
+            return None;
+        }
         let k = self.values.clone();
         let nf = self.model.dofs.n_free;
         let diag: Vec<usize> = (0..nf).map(|e| self.assembler.pattern.col_ptr[e + 1] - 1).collect();
