@@ -17,9 +17,10 @@
 //!
 //! Leaving a saddle: the integration reaches a saddle with (nearly) no component along its
 //! unstable mode, and an unstable mode K φ = ω² M φ, ω² < 0, grows from there only at the
-//! rate s of s² + α_M s + ω² = 0, about |ω²|/α_M when heavily damped — for a shallow fold
-//! saddle of a draped cloth (ω² ≈ −1.2 s⁻², α_M = 40 s⁻¹) one e-fold per 33 s, so growth from
-//! round-off takes ~1000 s of simulated time. Where the rest criteria hold at an unstable
+//! rate s of s² + α_M s + ω² = 0, about |ω²|/α_M when heavily damped (ω² = −1 s⁻²,
+//! α_M = 40 s⁻¹: one e-fold per 40 s, so growth from round-off takes ~1000 s of simulated
+//! time), and not at all from an exactly symmetric state (a perfect plate compressed past
+//! buckling). Where the rest criteria hold at an unstable
 //! equilibrium, the state is therefore moved along the lowest mode φ (shifted inverse
 //! iteration on K + c M, with c bracketed by Cholesky success just above −ω²_min) to the
 //! minimum of the potential along it — the first zero of the directional derivative
@@ -53,9 +54,10 @@ use crate::element::quadrature::{bilinear, gauss_legendre};
 use crate::element::NODE_DOFS;
 use crate::model::{Model, State, FIXED, UNTIED};
 
-/// Saddle escapes per Dynamic step; later unstable rests are only counted, the integration
-/// goes on (a saddle whose double well lies below the rest tolerance — the minima a few µm
-/// off, below what the residual tolerance resolves — is re-entered by the damped motion).
+/// Saddle escapes per Dynamic step; later unstable rests are only counted and the
+/// integration goes on (bounds the cost when the damped motion keeps returning to the state,
+/// as it did to the penalty-unstable contact states before the stability test used the
+/// contact constraint limit, `contact::mechanics`).
 const MAX_SADDLE_ESCAPES: usize = 10;
 
 /// Controls of a `Dynamic` step (SI units or any consistent set; times in the model's
