@@ -14,7 +14,9 @@
 //! its penetration decays geometrically towards zero over the increments of a pseudo-
 //! transient drape, whatever the load the node carries (a cloth hanging from a few nodes on
 //! a neck rim loads them far above the uniform pressure the penalty is sized for); a
-//! separated pair's multiplier is reset to zero.
+//! separated pair's multiplier is reset to zero. The stability test of a rest state uses the
+//! constraint limit of the normal term (`CONSTRAINT_LIMIT_FACTOR`): at the Uzawa fixed point
+//! the gap is enforced exactly, not through the penalty.
 //! Friction: regularised Coulomb law measured from an anchor point x̂ (where the node
 //! stuck): s = (I − n̄n̄ᵀ)(x − x̂), t = −μλ̄ tanh(k_t|s|/(μλ̄)) ŝ — the elastic-slip penalty
 //! k_t for small s, saturating smoothly at the Coulomb limit μλ̄ (a hard stick/slip switch
@@ -49,6 +51,18 @@ use super::body::{RigidBody, Shape};
 use crate::element::NODE_DOFS;
 use crate::model::{Model, State};
 use crate::solver::NodalForces;
+
+/// Factor on the normal penalty in the stability tangent (`NodalForces::stability_tangent`).
+/// The augmented Lagrangian's Uzawa fixed point enforces g = 0 exactly, so a rest state's
+/// stability is that of the Hessian reduced to the tangent motions n·δx = 0 of the active
+/// pairs; by Debreu's lemma (Econometrica 20, 1952; Bertsekas, *Constrained Optimization and
+/// Lagrange Multiplier Methods* 1982, Lemma 1.25) that reduced Hessian is positive definite
+/// iff H + c Σ k n nᵀ is for all large enough c. With the penalty itself (c = 1) a mode that
+/// sinks a contact node into the body by a few µm while the overhang turns about it shows as
+/// unstable, although the Uzawa updates push the node back out and the damped motion returns
+/// to the state (the 80-sector Cusick cotton drape: ω² = −1.2 s⁻² with c = 1, positive definite
+/// with c = 10).
+const CONSTRAINT_LIMIT_FACTOR: f64 = 1e3;
 
 /// A pair counts as sliding (and its anchor is dragged along on commit) when k_t|s| > 2μλ,
 /// i.e. the regularised friction force exceeds tanh 2 = 96 % of μλ.
@@ -137,6 +151,8 @@ pub struct ContactSet {
     pub reject_through: bool,
     /// Per-increment reports (also returned by `commit`).
     pub increments: Vec<ContactIncrement>,
+    /// The tangent is that of the stability test (normal penalty × `CONSTRAINT_LIMIT_FACTOR`).
+    stability: bool,
 }
 
 impl ContactSet {
@@ -185,6 +201,7 @@ impl ContactSet {
             search_s: 0.0,
             reject_through: true,
             increments: Vec::new(),
+            stability: false,
         }
     }
 
@@ -219,7 +236,8 @@ impl ContactSet {
                     let n = prox.normal;
                     f -= n * lambda;
                     if with_tangent {
-                        kk += n * n.transpose() * k - distance_hessian(body, &x, &n, prox.distance) * lambda;
+                        let kn = if self.stability { k * CONSTRAINT_LIMIT_FACTOR } else { k };
+                        kk += n * n.transpose() * kn - distance_hessian(body, &x, &n, prox.distance) * lambda;
                     }
                     let mut ev = PairEval { gap: g, lambda, active: true, normal: n, ..Default::default() };
                     // Saturation level: static unless the pair slid in the last increment.
@@ -375,6 +393,10 @@ impl NodalForces for ContactSet {
 
     fn search_seconds(&self) -> f64 {
         self.search_s
+    }
+
+    fn stability_tangent(&mut self, on: bool) {
+        self.stability = on;
     }
 
     /// `contact_pressure` (Pa, normal force over tributary area, summed over bodies),

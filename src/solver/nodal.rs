@@ -38,6 +38,13 @@ pub trait NodalForces: Send {
         let _ = (model, state);
         Vec::new()
     }
+    /// Switches the tangent blocks of [`NodalForces::add`] to those of the stability test of
+    /// a rest state (`on`) or back to the Newton tangent. Terms that enforce a constraint
+    /// exactly at their fixed point (augmented Lagrangian contact) report there the stiffness
+    /// of the constraint limit instead of their regularising penalty. Default: no change.
+    fn stability_tangent(&mut self, on: bool) {
+        let _ = on;
+    }
     /// A summary of the whole run: (section name in summary.json, value).
     fn summary(&self) -> Option<(String, serde_json::Value)> {
         None
