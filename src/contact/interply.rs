@@ -196,6 +196,8 @@ struct Surface {
     /// Edges (node pairs, smaller first) of the ply's free boundary: quad sides of one
     /// element that are not sewn (both ends tied).
     boundary: std::collections::BTreeSet<(usize, usize)>,
+    /// Nodes on those edges.
+    boundary_nodes: std::collections::BTreeSet<usize>,
 }
 
 impl Surface {
@@ -207,7 +209,7 @@ impl Surface {
         let f: Vec<usize> = (0..3).filter(|&j| bary[j] > 0.0).map(|j| t[j]).collect();
         match f[..] {
             [a, b] => self.boundary.contains(&(a.min(b), a.max(b))),
-            [a] => self.boundary.iter().any(|&(p, q)| p == a || q == a),
+            [a] => self.boundary_nodes.contains(&a),
             _ => false,
         }
     }
@@ -215,14 +217,15 @@ impl Surface {
     /// Distance of the node at `y` from the master ply, positive on side `side` — `d` (the
     /// signed closest-point distance from triangle `tri`, barycentric coordinates `bary`)
     /// inside the ply; for a node whose closest point lies on the free boundary, its distance
-    /// from the plane of that facet, or `None` more than half an element past the edge.
-    fn distance(&self, tri: usize, bary: &[f64; 3], d: f64, side: f64, x: &dyn Fn(usize) -> Vector3<f64>, y: &Vector3<f64>) -> Option<f64> {
+    /// from the plane of that facet, or `None` more than half an element past the edge; with
+    /// whether that boundary plane was used.
+    fn distance(&self, tri: usize, bary: &[f64; 3], d: f64, side: f64, x: &dyn Fn(usize) -> Vector3<f64>, y: &Vector3<f64>) -> Option<(f64, bool)> {
         if !self.on_boundary(tri, bary) {
-            return Some(side * d);
+            return Some((side * d, false));
         }
         let p = self.tris[tri].map(x);
         let (lam, n) = project(&p, y)?;
-        (lam.iter().all(|&l| l >= -0.5)).then(|| side * n.dot(&(y - p[0])))
+        (lam.iter().all(|&l| l >= -0.5)).then(|| (side * n.dot(&(y - p[0])), true))
     }
 }
 
@@ -386,8 +389,9 @@ impl InterplyContact {
                             *count.entry((a.min(b), a.max(b))).or_insert(0usize) += 1;
                         }
                     }
-                    let boundary = count.into_iter().filter(|&((a, b), c)| c == 1 && !(tied.contains(&a) && tied.contains(&b))).map(|(e, _)| e).collect();
-                    surfaces.push(Surface { part: p, tris, membrane, half, boundary });
+                    let boundary: std::collections::BTreeSet<(usize, usize)> = count.into_iter().filter(|&((a, b), c)| c == 1 && !(tied.contains(&a) && tied.contains(&b))).map(|(e, _)| e).collect();
+                    let boundary_nodes = boundary.iter().flat_map(|&(a, b)| [a, b]).collect();
+                    surfaces.push(Surface { part: p, tris, membrane, half, boundary, boundary_nodes });
                     surfaces.len() - 1
                 });
             }
@@ -416,7 +420,7 @@ impl InterplyContact {
                     // below the half-thicknesses (measured as `evaluate` measures it, against
                     // the facet's plane for a node over the free edge) is taken as the
                     // contact distance (a stress-free reference, no initial penetration).
-                    let Some(distance) = master.distance(tri, &bary, d, d.signum(), &x0, &model.x0[a]) else { continue };
+                    let Some((distance, _)) = master.distance(tri, &bary, d, d.signum(), &x0, &model.x0[a]) else { continue };
                     let offset = offset.min(distance);
                     let k_n = setup.settings.penalty.unwrap_or_else(|| setup.settings.penalty_factor * surfaces[ss].membrane.min(master.membrane) * area[a] / (size * size));
                     records.push(Record { node: a, surface: ms, side: d.signum(), offset, k_n, area: area[a], size });
@@ -483,8 +487,7 @@ impl InterplyContact {
                 // against the plane of the boundary facet instead (the facet's gap extended
                 // past its edge, continuous with the interior one), up to half an element
                 // beyond the edge.
-                let plane = s.on_boundary(tri, &bary);
-                let Some(distance) = s.distance(tri, &bary, d, r.side, &x, &x(r.node)) else { return (Eval::default(), None) };
+                let Some((distance, plane)) = s.distance(tri, &bary, d, r.side, &x, &x(r.node)) else { return (Eval::default(), None) };
                 let gap = distance - r.offset;
                 // Beyond the depth limit the master is a distant part of the ply (a fold), not
                 // the surface this node is pressed against.
