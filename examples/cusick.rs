@@ -1,5 +1,5 @@
 //! Cusick drape study: runs garments/drape/cusick.ron with a chosen fabric preset, mesh
-//! (ntheta sectors, graded rings for near-square elements), first time step and time-step
+//! (ntheta sectors, rings refined at the disc rim), first time step and time-step
 //! limit of the Dynamic step, and a seeded
 //! perturbation (both discs shifted by 0.25–0.5 mm in a seeded direction and a seeded
 //! 0.1 mm random-field imperfection of the specimen's overhang, tapered to zero over
@@ -7,7 +7,13 @@
 //! seed_outside_support`), and prints one JSON line: sizes, steps, Newton iterations, wall
 //! time and its split, drape coefficient, folds, penetration.
 //!
-//! cargo run --release --example cusick -- PRESET NTHETA DT_MS MAX_STEPS SEED [ACCEPT_UNSTABLE]
+//! cargo run --release --example cusick -- PRESET NTHETA DT_MS MAX_STEPS SEED [ACCEPT_UNSTABLE] [RIM]
+//!
+//! RIM (default 8, the scene's) chooses the radial mesh: K ≥ 1 is the scene's
+//! `FocusedAnnulus` (`mesh::focused_rings`): rings 4 circumferential widths apart between the
+//! discs, near-square elements over the overhang, and radial steps K× finer than the
+//! circumferential width at the disc rim; RIM = 0 is the geometrically graded annulus of
+//! earlier studies (near-square elements everywhere, three quarters of them between the discs).
 //!
 //! ACCEPT_UNSTABLE = 1 sets `require_stable: false` (default 0): the step then ends at the
 //! first state meeting the kinetic-energy and residual rest criteria even where the static
@@ -28,9 +34,15 @@ fn main() -> Result<(), String> {
     let steps: usize = get(4, "2000").parse().map_err(|e| format!("MAX_STEPS: {e}"))?;
     let seed: u64 = get(5, "0").parse().map_err(|e| format!("SEED: {e}"))?;
     let accept_unstable = get(6, "0") == "1";
+    let rim: usize = get(7, "8").parse().map_err(|e| format!("RIM: {e}"))?;
     let path = concat!(env!("CARGO_MANIFEST_DIR"), "/garments/drape/cusick.ron");
     let text = std::fs::read_to_string(path).map_err(|e| e.to_string())?;
     let nr = ((7.5f64).ln() / (1.0 + std::f64::consts::TAU / ntheta as f64).ln()).round() as usize;
+    let mesh = if rim == 0 {
+        format!("Annulus(ri: 0.02, ro: 0.15, nr: {nr}, ntheta: {ntheta}, graded: true)")
+    } else {
+        format!("FocusedAnnulus(ri: 0.02, ro: 0.15, ntheta: {ntheta}, focus: 0.09, refine: {rim}.0, inner_aspect: 4.0)")
+    };
     let thickness = plyshell::material::FabricProperties::preset(&preset).ok_or("unknown preset")?.thickness;
     // Seeded perturbation (splitmix64).
     let mut state = seed.wrapping_add(0x9E37_79B9_7F4A_7C15);
@@ -49,7 +61,7 @@ fn main() -> Result<(), String> {
     let text = text
         .replace("preset: Some(\"cotton_broadcloth\")", &format!("preset: Some(\"{preset}\")"))
         .replace("thickness: 0.3e-3", &format!("thickness: {thickness:e}"))
-        .replace("nr: 16, ntheta: 48", &format!("nr: {nr}, ntheta: {ntheta}"))
+        .replace("FocusedAnnulus(ri: 0.02, ro: 0.15, ntheta: 48, focus: 0.09, refine: 8.0, inner_aspect: 4.0)", &mesh)
         .replace("dt: 1.0e-3", &format!("dt: {:e}", dt_ms * 1e-3))
         .replace("max_steps: 2000", &format!("max_steps: {steps}{}", if accept_unstable { ", require_stable: false" } else { "" }))
         .replace(
@@ -67,7 +79,7 @@ fn main() -> Result<(), String> {
     let summary = analysis::run(&sc, &built, &Default::default(), &mut |_| {}).map_err(|e| e.to_string())?;
     let d = summary.extra.get("drape").cloned().unwrap_or_default();
     let line = serde_json::json!({
-        "preset": preset, "ntheta": ntheta, "require_stable": !accept_unstable, "nr": nr, "dt_ms": dt_ms, "seed": seed,
+        "preset": preset, "ntheta": ntheta, "rim": rim, "rings": summary.sizes.nodes / ntheta, "require_stable": !accept_unstable, "nr": nr, "dt_ms": dt_ms, "seed": seed,
         "dofs": summary.sizes.dofs, "elements": summary.sizes.elements, "steps": summary.increments.len(),
         "newton_iterations": summary.newton_iterations, "wall_s": summary.wall_s,
         "assembly_s": summary.timings.assembly, "factorization_s": summary.timings.factorization,
@@ -82,3 +94,4 @@ fn main() -> Result<(), String> {
     println!("{line}");
     Ok(())
 }
+

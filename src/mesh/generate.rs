@@ -339,22 +339,101 @@ pub fn annulus(ri: f64, ro: f64, nr: usize, ntheta: usize, graded: bool) -> Resu
         return Err(MeshError::Invalid(format!("ro ({ro}) must be greater than ri ({ri})")));
     }
     count("nr", nr, 1)?;
+    let radii: Vec<f64> = (0..=nr)
+        .map(|i| {
+            let f = i as f64 / nr as f64;
+            if i == nr {
+                ro
+            } else if graded {
+                ri * (ro / ri).powf(f)
+            } else {
+                ri + (ro - ri) * f
+            }
+        })
+        .collect();
+    annulus_rings(&radii, ntheta)
+}
+
+/// Full flat annulus (closed in θ) whose rings of nodes lie at the given `radii` (strictly
+/// increasing, first > 0), with `ntheta` sectors: node `(r cos θ, r sin θ, 0)`, director +z.
+/// Lets a mesh be fine only where the solution needs it (e.g. a Cusick specimen's overhang
+/// and the support disc's rim) and coarse where the specimen is held flat. Edges `"inner"`,
+/// `"outer"` (ordered by increasing θ).
+pub fn annulus_rings(radii: &[f64], ntheta: usize) -> Result<ShellMesh, MeshError> {
+    if radii.len() < 2 {
+        return Err(MeshError::Invalid(format!("radii must list at least 2 ring radii, got {}", radii.len())));
+    }
+    positive("radii[0]", radii[0])?;
+    for (i, w) in radii.windows(2).enumerate() {
+        if !(w[1].is_finite() && w[1] > w[0]) {
+            return Err(MeshError::Invalid(format!(
+                "radii must be finite and strictly increasing: radii[{}] = {} follows radii[{i}] = {}",
+                i + 1,
+                w[1],
+                w[0]
+            )));
+        }
+    }
     count("ntheta", ntheta, 3)?;
+    let nr = radii.len() - 1;
     let g = Grid::new(nr, ntheta, true)?;
     let mut m = g.build(|i, j| {
-        let f = i as f64 / nr as f64;
-        let r = if i == nr {
-            ro
-        } else if graded {
-            ri * (ro / ri).powf(f)
-        } else {
-            ri + (ro - ri) * f
-        };
+        let r = radii[i];
         let (s, c) = (TAU * j as f64 / ntheta as f64).sin_cos();
         (Vector3::new(r * c, r * s, 0.0), Vector3::z())
     })?;
     m.edges = edges(vec![("inner", g.row_v(0)), ("outer", g.row_v(nr))]);
     finish("annulus", "check the parameters", m)
+}
+
+/// Ring radii from `ri` to `ro` for an annulus of `ntheta` sectors refined toward the circle
+/// r = `focus` (e.g. a support disc's rim, where a drape bends over a rounded edge):
+/// marched outward from ri with the radial step
+/// dr(r) = min(cap(r), w·focus/`refine` + ¼|r − focus|), w = 2π/ntheta,
+/// so the step at the focus is `refine` times finer than the circumferential width there,
+/// and away from it grows by at most ~25 % per ring up to cap(r) = `inner_aspect`·w·r inside
+/// the focus and w·r outside it (near-square elements). Rings beyond focus + 10 % of
+/// (ro − focus)... are stretched uniformly so the last lands on ro. Every step scales with w,
+/// so the family refines uniformly with ntheta.
+pub fn focused_rings(ri: f64, ro: f64, ntheta: usize, focus: f64, refine: f64, inner_aspect: f64) -> Result<Vec<f64>, MeshError> {
+    positive("ri", ri)?;
+    positive("ro", ro)?;
+    if ro <= ri {
+        return Err(MeshError::Invalid(format!("ro ({ro}) must be greater than ri ({ri})")));
+    }
+    if !(focus.is_finite() && focus > ri && focus < ro) {
+        return Err(MeshError::Invalid(format!("focus ({focus}) must lie between ri ({ri}) and ro ({ro})")));
+    }
+    if !(refine.is_finite() && refine >= 1.0) {
+        return Err(MeshError::Invalid(format!("refine must be a finite number ≥ 1, got {refine}")));
+    }
+    if !(inner_aspect.is_finite() && inner_aspect >= 1.0) {
+        return Err(MeshError::Invalid(format!("inner_aspect must be a finite number ≥ 1, got {inner_aspect}")));
+    }
+    count("ntheta", ntheta, 3)?;
+    let w = TAU / ntheta as f64;
+    let step = |r: f64| {
+        let cap = if r < focus { inner_aspect * w * r } else { w * r };
+        cap.min(w * focus / refine + 0.25 * (r - focus).abs())
+    };
+    let mut radii = vec![ri];
+    let mut r = ri;
+    while r < ro {
+        r += step(r);
+        radii.push(r);
+    }
+    // Snap the last ring to ro: drop it if it overshoots by more than half a step, then
+    // stretch the rings beyond the refined zone.
+    let anchor = focus + (ro - focus) / 6.0;
+    let k = radii.len() - 1;
+    if radii[k - 1] > anchor && radii[k] - ro > 0.5 * (radii[k] - radii[k - 1]) {
+        radii.pop();
+    }
+    let end = radii[radii.len() - 1];
+    for r in radii.iter_mut().filter(|r| **r > anchor) {
+        *r = anchor + (*r - anchor) * (ro - anchor) / (end - anchor);
+    }
+    Ok(radii)
 }
 
 /// Pre-twisted strip along x with `nx x ny` quads: x from 0 to `length`,
@@ -709,6 +788,54 @@ mod tests {
                 .to_string()
                 .contains("nr")
         );
+    }
+
+    #[test]
+    fn focused_rings_refine_at_the_focus_and_grade_smoothly() {
+        let (n, k) = (96, 8.0);
+        let w = TAU / n as f64;
+        let r = focused_rings(0.02, 0.15, n, 0.09, k, 4.0).unwrap();
+        assert_eq!(r[0], 0.02);
+        assert!((r[r.len() - 1] - 0.15).abs() < 1e-15);
+        // finest steps next to the focus: w·focus/k plus a quarter of the distance to it
+        let fine = w * 0.09 / k;
+        let (i, min) = r.windows(2).map(|s| s[1] - s[0]).enumerate().fold((0, f64::MAX), |a, (i, d)| if d < a.1 { (i, d) } else { a });
+        assert!(min >= fine && min < 1.25 * fine && (r[i] - 0.09).abs() < 2.0 * fine, "{min} at {}", r[i]);
+        for s in r.windows(3) {
+            let (a, b) = (s[1] - s[0], s[2] - s[1]);
+            assert!(a > 0.0 && b > 0.0);
+            // grading: away from the focus a step grows by at most 25 % of itself (or by the
+            // geometric ratio 1 + 4w of the capped rings between the discs), toward it it
+            // shrinks by at most 25 % (ratio 4/3)
+            assert!(b / a < 1.25f64.max(1.0 + 4.0 * w) + 0.01 && a / b < 1.34, "{s:?}");
+        }
+        // near-square over the overhang, 4 circumferential widths between the discs
+        let last = r[r.len() - 1] - r[r.len() - 2];
+        assert!((last / (w * r[r.len() - 2]) - 1.0).abs() < 0.1, "{last}");
+        assert!((r[1] - r[0] - 4.0 * w * 0.02).abs() < 1e-15);
+        // the family refines with ntheta: at twice the sectors every step stays below its cap
+        // (∝ w) and the finest step halves
+        let r2 = focused_rings(0.02, 0.15, 2 * n, 0.09, k, 4.0).unwrap();
+        let w2 = 0.5 * w;
+        for s in r2.windows(2) {
+            let cap = if s[0] < 0.09 { 4.0 * w2 * s[0] } else { w2 * s[0] };
+            assert!(s[1] - s[0] < 1.06 * cap, "{s:?}"); // the final stretch adds up to half a step over 50 mm
+        }
+        let min2 = r2.windows(2).map(|s| s[1] - s[0]).fold(f64::MAX, f64::min);
+        assert!(min2 >= 0.5 * fine && min2 < 0.625 * fine, "{min2}");
+        let m = annulus_rings(&r, n).unwrap();
+        counts(&m, r.len() * n, (r.len() - 1) * n);
+        for (bad, what) in [
+            (focused_rings(0.02, 0.15, n, 0.2, k, 4.0), "focus"),
+            (focused_rings(0.02, 0.15, n, 0.09, 0.5, 4.0), "refine"),
+            (focused_rings(0.02, 0.15, n, 0.09, k, f64::NAN), "inner_aspect"),
+            (focused_rings(0.02, 0.15, 2, 0.09, k, 4.0), "ntheta"),
+        ] {
+            assert!(bad.unwrap_err().to_string().contains(what), "{what}");
+        }
+        let e = annulus_rings(&[0.02, 0.05, 0.04], 8).unwrap_err().to_string();
+        assert!(e.contains("radii[2]") && e.contains("increasing"), "{e}");
+        assert!(annulus_rings(&[0.02], 8).unwrap_err().to_string().contains("at least 2"));
     }
 
     #[test]

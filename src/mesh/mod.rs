@@ -17,7 +17,7 @@ pub mod generate;
 pub mod obj;
 pub mod select;
 
-pub use generate::{annulus, cylindrical_panel, hemisphere, rectangle, slit_annulus, twisted_strip};
+pub use generate::{annulus, annulus_rings, cylindrical_panel, focused_rings, hemisphere, rectangle, slit_annulus, twisted_strip};
 pub use obj::{from_obj, read_obj};
 pub use select::{select_box, select_edge, select_nearest, select_plane};
 

@@ -515,6 +515,10 @@ fn make_mesh(spec: &MeshSpec, base_dir: &Path) -> Result<ShellMesh, mesh::MeshEr
         }
         MeshSpec::SlitAnnulus { ri, ro, nr, ntheta } => mesh::slit_annulus(ri, ro, nr, ntheta),
         MeshSpec::Annulus { ri, ro, nr, ntheta, graded } => mesh::annulus(ri, ro, nr, ntheta, graded),
+        MeshSpec::AnnulusRings { ref radii, ntheta } => mesh::annulus_rings(radii, ntheta),
+        MeshSpec::FocusedAnnulus { ri, ro, ntheta, focus, refine, inner_aspect } => {
+            mesh::annulus_rings(&mesh::focused_rings(ri, ro, ntheta, focus, refine, inner_aspect)?, ntheta)
+        }
         MeshSpec::TwistedStrip { length, width, twist, nx, ny } => mesh::twisted_strip(length, width, rad(twist), nx, ny),
         MeshSpec::Obj { ref path } => mesh::read_obj(&base_dir.join(path)),
     }

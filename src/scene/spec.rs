@@ -290,8 +290,30 @@ pub enum MeshSpec {
     /// Full flat annulus about the z axis (closed in θ); `graded` radii grow geometrically
     /// for near-square elements. Edges inner, outer.
     Annulus { ri: f64, ro: f64, nr: usize, ntheta: usize, #[serde(default)] graded: bool },
+    /// Full flat annulus about the z axis with rings of nodes at the listed `radii`
+    /// (strictly increasing): fine where the drape bends, coarse where it is held flat.
+    /// Edges inner, outer.
+    AnnulusRings { radii: Vec<f64>, ntheta: usize },
+    /// Full flat annulus about the z axis refined toward the circle r = `focus` (e.g. the
+    /// rim of a support disc): radial steps `refine` times finer than the circumferential
+    /// width at the focus, growing ≤ 25 % per ring to `inner_aspect` (default 1) times the
+    /// circumferential width inside the focus and to it outside (`mesh::focused_rings`).
+    /// Edges inner, outer.
+    FocusedAnnulus {
+        ri: f64,
+        ro: f64,
+        ntheta: usize,
+        focus: f64,
+        refine: f64,
+        #[serde(default = "unit_aspect")]
+        inner_aspect: f64,
+    },
     /// Quad mesh from a Wavefront OBJ file (path relative to the scene file). Edge boundary.
     Obj { path: String },
+}
+
+fn unit_aspect() -> f64 {
+    1.0
 }
 
 /// Node selectors.
