@@ -9,6 +9,14 @@
 //!
 //! cargo run --release --example cusick -- PRESET NTHETA DT_MS MAX_STEPS SEED [ACCEPT_UNSTABLE] [RIM]
 //!
+//! With CUSICK_OUT=DIR set, summary.json (per time step: kinetic energy, static residual,
+//! contact changes; written after a failed run too) and the last state go to DIR.
+//!
+//! cargo run --release --example cusick -- plot STUDY.jsonl OUT.svg
+//!
+//! plots the drape coefficient against DOFs for every (preset, RIM) series of seed-0 lines in
+//! STUDY.jsonl (lines printed by this example), with the measured coefficients as reference.
+//!
 //! RIM (default 8, the scene's) chooses the radial mesh: K ≥ 1 is the scene's
 //! `FocusedAnnulus` (`mesh::focused_rings`): rings 4 circumferential widths apart between the
 //! discs, near-square elements over the overhang, and radial steps K× finer than the
@@ -27,6 +35,9 @@ use plyshell::{analysis, scene};
 
 fn main() -> Result<(), String> {
     let args: Vec<String> = std::env::args().collect();
+    if args.get(1).map(String::as_str) == Some("plot") {
+        return plot(args.get(2).ok_or("plot needs STUDY.jsonl")?, args.get(3).ok_or("plot needs OUT.svg")?);
+    }
     let get = |i: usize, d: &str| args.get(i).cloned().unwrap_or_else(|| d.to_string());
     let preset = get(1, "cotton_broadcloth");
     let ntheta: usize = get(2, "48").parse().map_err(|e| format!("NTHETA: {e}"))?;
@@ -76,7 +87,10 @@ fn main() -> Result<(), String> {
         let rf = RandomField { amplitude: 0.1e-3, correlation_length: 0.05, seed };
         built.model = seed_outside_support(&built.model, &rf, &Vector3::zeros(), 0.09, 0.11);
     }
-    let summary = analysis::run(&sc, &built, &Default::default(), &mut |_| {}).map_err(|e| e.to_string())?;
+    // CUSICK_OUT=DIR writes summary.json (per-time-step kinetic energy, residual, contact
+    // changes; also after a failed run) and the last state there.
+    let options = analysis::RunOptions { out_dir: std::env::var_os("CUSICK_OUT").map(Into::into) };
+    let summary = analysis::run(&sc, &built, &options, &mut |_| {}).map_err(|e| e.to_string())?;
     let d = summary.extra.get("drape").cloned().unwrap_or_default();
     let line = serde_json::json!({
         "preset": preset, "ntheta": ntheta, "rim": rim, "rings": summary.sizes.nodes / ntheta, "require_stable": !accept_unstable, "nr": nr, "dt_ms": dt_ms, "seed": seed,
@@ -95,3 +109,35 @@ fn main() -> Result<(), String> {
     Ok(())
 }
 
+/// Drape coefficient against DOFs (log axis) for each (preset, RIM) series of the seed-0 lines
+/// in `study`, plus the measured coefficients (Matsudaira et al. 2015, reference/README.md)
+/// drawn as reference markers across the DOF range; written to `out` as SVG.
+fn plot(study: &str, out: &str) -> Result<(), String> {
+    use plyshell::io::plot::{plot_xy, Series};
+    use std::collections::BTreeMap;
+    let text = std::fs::read_to_string(study).map_err(|e| format!("{study}: {e}"))?;
+    let mut series: BTreeMap<(String, u64), Vec<(f64, f64)>> = BTreeMap::new();
+    for (n, line) in text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty()) {
+        let v: serde_json::Value = serde_json::from_str(line).map_err(|e| format!("{study}:{}: {e}", n + 1))?;
+        if v["seed"].as_u64() != Some(0) {
+            continue;
+        }
+        let field = |k: &str| v[k].as_f64().ok_or_else(|| format!("{study}:{}: field {k} missing or not a number", n + 1));
+        let preset = v["preset"].as_str().ok_or_else(|| format!("{study}:{}: field preset missing", n + 1))?.to_string();
+        series.entry((preset, v["rim"].as_u64().unwrap_or(0))).or_default().push((field("dofs")?, field("dc")?));
+    }
+    let (lo, hi) = series.values().flatten().fold((f64::MAX, f64::MIN), |(a, b), p| (a.min(p.0), b.max(p.0)));
+    let mut all: Vec<Series> = series
+        .into_iter()
+        .map(|((preset, rim), mut points)| {
+            points.sort_by(|a, b| a.0.total_cmp(&b.0));
+            let mesh = if rim == 0 { "graded rings".to_string() } else { format!("rim refined ×{rim}") };
+            Series { name: format!("{preset}, {mesh}"), points, reference: false }
+        })
+        .collect();
+    for (preset, dc) in [("cotton_broadcloth", 82.9), ("polyester_faille", 28.3)] {
+        all.push(Series { name: format!("{preset}, measured"), points: vec![(lo, dc), (hi, dc)], reference: true });
+    }
+    plot_xy(std::path::Path::new(out), "Cusick drape coefficient vs mesh", "degrees of freedom", "drape coefficient (%)", &all, true, false)
+        .map_err(|e| e.to_string())
+}
