@@ -9,7 +9,7 @@
 //!
 //! cargo run --release --example cusick -- PRESET NTHETA DT_MS MAX_STEPS SEED [ACCEPT_UNSTABLE] [RIM]
 //!
-//! With CUSICK_OUT=DIR set, summary.json (per time step: kinetic energy, static residual,
+//! CUSICK_DT_MAX overrides the scene's largest time step (1 s). With CUSICK_OUT=DIR set, summary.json (per time step: kinetic energy, static residual,
 //! contact changes; written after a failed run too) and the last state go to DIR.
 //!
 //! cargo run --release --example cusick -- plot STUDY.jsonl OUT.svg
@@ -74,6 +74,7 @@ fn main() -> Result<(), String> {
         .replace("thickness: 0.3e-3", &format!("thickness: {thickness:e}"))
         .replace("FocusedAnnulus(ri: 0.02, ro: 0.15, ntheta: 48, focus: 0.09, refine: 8.0, inner_aspect: 4.0)", &mesh)
         .replace("dt: 1.0e-3", &format!("dt: {:e}", dt_ms * 1e-3))
+        .replace("dt_max: 1.0", &format!("dt_max: {}", std::env::var("CUSICK_DT_MAX").unwrap_or_else(|_| "1.0".into())))
         .replace("max_steps: 2000", &format!("max_steps: {steps}{}", if accept_unstable { ", require_stable: false" } else { "" }))
         .replace(
             "translation: (0.0, 0.0, -0.010149999), rotation: (0.0, 0.0, 0.0)",
