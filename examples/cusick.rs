@@ -48,8 +48,8 @@ fn main() -> Result<(), String> {
     let rim: usize = get(7, "8").parse().map_err(|e| format!("RIM: {e}"))?;
     let path = concat!(env!("CARGO_MANIFEST_DIR"), "/garments/drape/cusick.ron");
     let text = std::fs::read_to_string(path).map_err(|e| e.to_string())?;
-    let nr = ((7.5f64).ln() / (1.0 + std::f64::consts::TAU / ntheta as f64).ln()).round() as usize;
     let mesh = if rim == 0 {
+        let nr = ((7.5f64).ln() / (1.0 + std::f64::consts::TAU / ntheta as f64).ln()).round() as usize;
         format!("Annulus(ri: 0.02, ro: 0.15, nr: {nr}, ntheta: {ntheta}, graded: true)")
     } else {
         format!("FocusedAnnulus(ri: 0.02, ro: 0.15, ntheta: {ntheta}, focus: 0.09, refine: {rim}.0, inner_aspect: 4.0)")
@@ -94,7 +94,7 @@ fn main() -> Result<(), String> {
     let summary = analysis::run(&sc, &built, &options, &mut |_| {}).map_err(|e| e.to_string())?;
     let d = summary.extra.get("drape").cloned().unwrap_or_default();
     let line = serde_json::json!({
-        "preset": preset, "ntheta": ntheta, "rim": rim, "rings": summary.sizes.nodes / ntheta, "require_stable": !accept_unstable, "nr": nr, "dt_ms": dt_ms, "seed": seed,
+        "preset": preset, "ntheta": ntheta, "rim": rim, "rings": summary.sizes.nodes / ntheta, "require_stable": !accept_unstable, "dt_ms": dt_ms, "seed": seed,
         "dofs": summary.sizes.dofs, "elements": summary.sizes.elements, "steps": summary.increments.len(),
         "newton_iterations": summary.newton_iterations, "wall_s": summary.wall_s,
         "assembly_s": summary.timings.assembly, "factorization_s": summary.timings.factorization,

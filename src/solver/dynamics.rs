@@ -494,16 +494,20 @@ impl<'m> Solver<'m> {
     /// [`Solver::assemble_stability_tangent`]) is positive definite (Lyapunov/Dirichlet: a
     /// strict minimum of the potential energy).
     fn stable(&mut self, state: &State, scales: &[f64]) -> bool {
-        if !self.assemble_stability_tangent(state, scales) {
-            return false;
-        }
+        self.assemble_stability_tangent(state, scales) && self.assembled_tangent_positive_definite()
+    }
+
+    /// Whether the assembled tangent K (left unchanged), shifted by 1e-10·diag|K| against
+    /// round-off, factors as LLᵀ.
+    fn assembled_tangent_positive_definite(&mut self) -> bool {
+        let mut shifted = self.values.clone();
         let col_ptr = &self.assembler.pattern.col_ptr;
         for c in 0..self.model.dofs.n_free {
             let p = col_ptr[c + 1] - 1;
-            self.values[p] += 1e-10 * self.values[p].abs();
+            shifted[p] += 1e-10 * shifted[p].abs();
         }
         let t = Instant::now();
-        let kind = self.cholesky.factorize(&self.values);
+        let kind = self.cholesky.factorize(&shifted);
         self.timings.factorization += t.elapsed().as_secs_f64();
         matches!(kind, Ok(FactorKind::Llt))
     }
@@ -514,7 +518,8 @@ impl<'m> Solver<'m> {
     /// inverse iteration x ← (K + c M)⁻¹ M x, M-normalised, converges to φ at the rate
     /// (ω²_min + c)/(ω²_2 + c) per iteration; ω² is the Rayleigh quotient φ·Kφ (φ·Mφ = 1).
     fn lowest_mode(&mut self, state: &State, scales: &[f64], mdiag: &[f64]) -> Option<(f64, Vec<f64>)> {
-        if !self.assemble_stability_tangent(state, scales) {
+        // Stable (the test of `stable`): no unstable mode.
+        if !self.assemble_stability_tangent(state, scales) || self.assembled_tangent_positive_definite() {
             return None;
         }
         let k = self.values.clone();
@@ -528,12 +533,6 @@ impl<'m> Solver<'m> {
             s.timings.factorization += t.elapsed().as_secs_f64();
             matches!(kind, Ok(FactorKind::Llt))
         };
-        // Stable (the test of `stable`, K + 10⁻¹⁰ diag|K| factors as LLᵀ): no unstable mode.
-        let mut shifted = k.clone();
-        diag.iter().for_each(|&p| shifted[p] += 1e-10 * k[p].abs());
-        if matches!(self.cholesky.factorize(&shifted), Ok(FactorKind::Llt)) {
-            return None;
-        }
         let scale = diag.iter().zip(mdiag).map(|(&p, m)| k[p].abs() / m).fold(0.0, f64::max);
         let mut hi = 1e-10 * scale;
         let mut lo = 0.0;
