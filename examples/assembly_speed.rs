@@ -1,45 +1,212 @@
-//! Times global assembly (element evaluation + scatter) of a scene's model at its reference
-//! state, with and without the tangent: `cargo run --release --example assembly_speed -- SCENE.ron [REPEATS]`.
-//! Prints seconds per assembly; the Newton solver's own split is in `summary.json`.
+//! Times the element kernel and global assembly.
+//!
+//! `cargo run --release --example assembly_speed -- --kernel [ELEMENTS] [REPEATS]`:
+//! microseconds per element per tangent and per residual (force + energy) of the 4-node
+//! shell, one thread, for St. Venant–Kirchhoff, Ciarlet neo-Hookean and fabric laminae with
+//! MITC4 and SRI shear, on a patch of distorted, warped, strongly deformed elements (median
+//! of REPEATS passes). Prints checksums of forces, energies and tangents, so that a change
+//! of the kernel can be checked to leave the results unchanged.
+//!
+//! `cargo run --release --example assembly_speed -- SCENE.ron [REPEATS]`: seconds per
+//! global assembly (element evaluation + scatter) of a scene's model in a deformed state,
+//! with and without the tangent, on 1 and 2 threads (median of REPEATS). The Newton
+//! solver's own split is in `summary.json`.
 
 use std::path::Path;
+use std::sync::Arc;
 use std::time::Instant;
 
+use nalgebra::Vector3;
 use plyshell::assembly::Assembler;
+use plyshell::element::{DirectorFrame, ElementGeometry, Section, SectionRule, ShearTreatment, ShellElement};
+use plyshell::material::{Fabric, FabricProperties, NeoHookean, ShellMaterial, StVenantKirchhoff};
 
-fn main() -> Result<(), String> {
-    let args: Vec<String> = std::env::args().collect();
-    let path = args.get(1).ok_or("usage: assembly_speed SCENE.ron [REPEATS]")?;
-    let repeats: usize = match args.get(2) {
-        Some(r) => r.parse().map_err(|e| format!("REPEATS: {e}"))?,
-        None => 5,
+/// CPU time of the calling thread in seconds (Linux `CLOCK_THREAD_CPUTIME_ID`, exact to the
+/// nanosecond and blind to time the thread spends preempted, so single-thread kernel timings
+/// hold up on a shared machine); wall time elsewhere.
+#[cfg(target_os = "linux")]
+fn thread_seconds() -> f64 {
+    #[repr(C)]
+    struct Timespec {
+        tv_sec: i64,
+        tv_nsec: i64,
+    }
+    unsafe extern "C" {
+        fn clock_gettime(clock: i32, tp: *mut Timespec) -> i32;
+    }
+    const CLOCK_THREAD_CPUTIME_ID: i32 = 3;
+    let mut t = Timespec { tv_sec: 0, tv_nsec: 0 };
+    // SAFETY: clock_gettime writes one timespec into the valid, exclusively borrowed `t`.
+    let rc = unsafe { clock_gettime(CLOCK_THREAD_CPUTIME_ID, &mut t) };
+    if rc == 0 { t.tv_sec as f64 + 1e-9 * t.tv_nsec as f64 } else { wall_seconds() }
+}
+
+#[cfg(not(target_os = "linux"))]
+fn thread_seconds() -> f64 {
+    wall_seconds()
+}
+
+fn wall_seconds() -> f64 {
+    use std::sync::OnceLock;
+    static START: OnceLock<Instant> = OnceLock::new();
+    START.get_or_init(Instant::now).elapsed().as_secs_f64()
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+fn minimum(v: &[f64]) -> f64 {
+    v.iter().copied().fold(f64::INFINITY, f64::min)
+}
+
+/// A patch of n×n distorted, slightly warped elements with non-parallel directors, and a
+/// deformed state of each (stretch, shear, bending, director tilts of ~0.1–0.4 rad).
+struct Patch {
+    x0: Vec<[Vector3<f64>; 4]>,
+    d0: Vec<[Vector3<f64>; 4]>,
+    u: Vec<[Vector3<f64>; 4]>,
+    frames: Vec<[DirectorFrame; 4]>,
+}
+
+fn patch(n: usize, size: f64) -> Patch {
+    let node = |i: usize, j: usize| {
+        let (x, y) = (i as f64, j as f64);
+        let jig = 0.15 * ((1.7 * x + 0.3 * y).sin() + (0.9 * y - 1.1 * x).cos());
+        Vector3::new(size * (x + 0.3 * jig), size * (y - 0.2 * jig), size * 0.05 * (0.7 * x).sin() * (0.5 * y).cos())
     };
+    let normal = |i: usize, j: usize| Vector3::new(0.04 * (i as f64).sin(), -0.03 * (j as f64).cos(), 1.0).normalize();
+    let mut p = Patch { x0: Vec::new(), d0: Vec::new(), u: Vec::new(), frames: Vec::new() };
+    for j in 0..n {
+        for i in 0..n {
+            let ids = [(i, j), (i + 1, j), (i + 1, j + 1), (i, j + 1)];
+            let x0 = ids.map(|(a, b)| node(a, b));
+            let d0 = ids.map(|(a, b)| normal(a, b));
+            let u = std::array::from_fn(|a| {
+                let x = x0[a];
+                Vector3::new(0.05 * x.y + 0.01 * x.x, -0.03 * x.x, 0.1 * x.x * x.y / size)
+            });
+            let frames = std::array::from_fn(|a| {
+                let (s, t) = (ids[a].0 as f64, ids[a].1 as f64);
+                DirectorFrame::new(d0[a], Some(Vector3::x())).tilted([0.1 + 0.02 * s, -0.15 + 0.03 * t])
+            });
+            p.x0.push(x0);
+            p.d0.push(d0);
+            p.u.push(u);
+            p.frames.push(frames);
+        }
+    }
+    p
+}
+
+fn kernel(n: usize, repeats: usize) -> Result<(), String> {
+    let fabric = FabricProperties::preset("cotton_broadcloth").ok_or("preset")?;
+    let h_fabric = fabric.thickness;
+    let materials: [(&str, Arc<dyn ShellMaterial>, f64, usize, f64); 3] = [
+        ("SVK", Arc::new(StVenantKirchhoff::new(2.0e11, 0.3, 5.0 / 6.0)), 0.01, 2, 1.0),
+        ("neo-Hookean", Arc::new(NeoHookean::new(4.0e5, 6.0e5)), 0.05, 2, 1.0),
+        ("fabric", Arc::new(Fabric::new(fabric)), h_fabric, 3, 0.02),
+    ];
+    println!("kernel: {} elements, 1 thread, {repeats} passes: fastest pass (median) in µs of thread CPU time per element", n * n);
+    println!("{:<12} {:<6} {:>16} {:>16}   checksums (Σ|f|, Σ energy, Σ|K|)", "material", "shear", "tangent", "residual");
+    for (name, material, h, tp, size) in materials {
+        for shear in [ShearTreatment::Mitc4, ShearTreatment::Sri] {
+            let section = Section { thickness: h, shear, thickness_points: tp, material: material.clone() };
+            let p = patch(n, size);
+            let rule = SectionRule::new(&section).map_err(|e| e.to_string())?;
+            let elements: Vec<ShellElement> = (0..n * n).map(|e| ShellElement { x0: p.x0[e], d0: p.d0[e], grain: None, section: &section }).collect();
+            let geoms: Vec<ElementGeometry> = elements.iter().map(|el| el.geometry(&rule)).collect::<Result<_, _>>().map_err(|e| e.to_string())?;
+            let mut times = [Vec::new(), Vec::new()];
+            let mut sums = (0.0, 0.0, 0.0);
+            for with_tangent in [true, false] {
+                for pass in 0..repeats + 1 {
+                    let t = thread_seconds();
+                    let (mut sf, mut se, mut sk) = (0.0, 0.0, 0.0);
+                    for e in 0..n * n {
+                        let out = elements[e].response_with(&rule, &geoms[e], &p.u[e], &p.frames[e], with_tangent).map_err(|e| e.to_string())?;
+                        sf += out.force.abs().sum();
+                        se += out.energy;
+                        if let Some(k) = out.stiffness.as_ref() {
+                            sk += k.abs().sum();
+                        }
+                    }
+                    let us = (thread_seconds() - t) * 1e6 / (n * n) as f64;
+                    if pass > 0 {
+                        times[usize::from(!with_tangent)].push(us);
+                    }
+                    if with_tangent {
+                        sums = (sf, se, sk);
+                    } else if pass == 0 && (sf != sums.0 || se != sums.1) {
+                        println!("  residual-only path differs: Σ|f| {sf:.16e}, Σ energy {se:.16e}");
+                    }
+                }
+            }
+            let cell = |t: &Vec<f64>| format!("{:.3} ({:.3})", minimum(t), median(t.clone()));
+            println!(
+                "{:<12} {:<6} {:>16} {:>16}   {:.15e} {:.15e} {:.15e}",
+                name,
+                format!("{shear:?}"),
+                cell(&times[0]),
+                cell(&times[1]),
+                sums.0,
+                sums.1,
+                sums.2
+            );
+        }
+    }
+    Ok(())
+}
+
+fn scene(path: &str, repeats: usize) -> Result<(), String> {
     let (_, built) = plyshell::scene::load(Path::new(path)).map_err(|e| e.to_string())?;
     let model = &built.model;
     let t = Instant::now();
     let asm = Assembler::new(model);
-    println!("elements {}, dofs {}, nnz {}, pattern {:.3} s", model.elements.len(), model.dofs.n_free, asm.nnz(), t.elapsed().as_secs_f64());
-    // A deformed state: a smooth transverse bulge with tilted directors.
+    let n_el = model.elements.len();
+    println!("elements {n_el}, dofs {}, nnz {}, pattern {:.3} s", model.dofs.n_free, asm.nnz(), t.elapsed().as_secs_f64());
+    // A deformed state: a small smooth perturbation of every free DOF.
     let mut state = model.initial_state();
     let du: Vec<f64> = (0..model.dofs.n_free).map(|i| 1e-5 * ((i % 17) as f64 - 8.0)).collect();
     model.update(&mut state, &du, 1.0);
     let mut f = vec![0.0; 5 * model.n_nodes()];
     let mut vals = vec![0.0; asm.nnz()];
-    for with_tangent in [false, true] {
-        let mut best = f64::INFINITY;
-        let mut total = 0.0;
-        for _ in 0..repeats {
-            let t = Instant::now();
-            let values = if with_tangent { Some(vals.as_mut_slice()) } else { None };
-            asm.assemble(model, &state, &mut f, values).map_err(|e| format!("element {}: {}", e.element, e.failure))?;
-            let s = t.elapsed().as_secs_f64();
-            best = best.min(s);
-            total += s;
+    for threads in [1, 2] {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().map_err(|e| e.to_string())?;
+        for with_tangent in [true, false] {
+            let mut times = Vec::new();
+            for _ in 0..repeats {
+                let t = Instant::now();
+                let values = if with_tangent { Some(vals.as_mut_slice()) } else { None };
+                pool.install(|| asm.assemble(model, &state, &mut f, values)).map_err(|e| format!("element {}: {}", e.element, e.failure))?;
+                times.push(t.elapsed().as_secs_f64());
+            }
+            let (fast, s) = (minimum(&times), median(times));
+            println!(
+                "threads {threads}, {}: fastest {fast:.4} s, median {s:.4} s per assembly; {:.3} ({:.3}) µs per element",
+                if with_tangent { "tangent " } else { "residual" },
+                fast * 1e6 / n_el as f64,
+                s * 1e6 / n_el as f64
+            );
         }
-        println!("tangent {with_tangent}: best {best:.4} s, mean {:.4} s per assembly", total / repeats as f64);
     }
     let norm: f64 = f.iter().map(|v| v * v).sum::<f64>().sqrt();
     let ksum: f64 = vals.iter().map(|v| v.abs()).sum();
-    println!("checks: |f| = {norm:.12e}, sum|K| = {ksum:.12e}");
+    println!("checks: |f| = {norm:.15e}, sum|K| = {ksum:.15e}");
     Ok(())
+}
+
+fn main() -> Result<(), String> {
+    let args: Vec<String> = std::env::args().collect();
+    let usage = "usage: assembly_speed --kernel [ELEMENTS] [REPEATS] | assembly_speed SCENE.ron [REPEATS]";
+    let first = args.get(1).ok_or(usage)?;
+    let number = |i: usize, default: usize| -> Result<usize, String> {
+        args.get(i).map_or(Ok(default), |r| r.parse().map_err(|e| format!("argument {i}: {e}")))
+    };
+    if first == "--kernel" {
+        let n = (number(2, 1024)? as f64).sqrt().ceil().max(1.0) as usize;
+        kernel(n, number(3, 7)?)
+    } else {
+        scene(first, number(2, 5)?)
+    }
 }

@@ -1,11 +1,16 @@
-//! The 4-node degenerated shell element and its pieces.
+//! The 4-node degenerated shell element and its pieces: kinematic vectors and director
+//! chain (`kinematics`), integration rule and reference geometry (`rule`), tangent
+//! assembly (`tangent`), and the element itself (`shell4`).
 
 pub mod director;
+mod kinematics;
 pub mod quadrature;
+mod rule;
 pub mod shell4;
+mod tangent;
 
 pub use director::DirectorFrame;
-pub use shell4::{ElementFailure, ElementGeometry, ElementOutput, Section, SectionRule, ShearTreatment, ShellElement};
+pub use shell4::{ElemMat, ElemVec, ElementFailure, ElementGeometry, ElementOutput, Section, SectionRule, ShearTreatment, ShellElement};
 
 /// Unknowns per node: three translations and the two director tilts (α1, α2).
 pub const NODE_DOFS: usize = 5;

@@ -69,6 +69,12 @@ pub trait ShellMaterial: Send + Sync + std::fmt::Debug {
         let _ = zeta;
         self.response(strain)
     }
+    /// Stress and energy density at thickness coordinate ζ without the tangent (the
+    /// residual-only path); the same values as [`ShellMaterial::response_at`].
+    fn stress_at(&self, strain: &Voigt5, zeta: f64) -> Result<(Voigt5, f64), MaterialFailure> {
+        let r = self.response_at(strain, zeta)?;
+        Ok((r.stress, r.energy))
+    }
     /// Thickness Gauss points the material needs (None: the section's choice).
     fn thickness_points(&self) -> Option<usize> {
         None
