@@ -103,11 +103,13 @@ impl Lin {
     }
 
     /// The (index, coefficient) terms.
+    #[inline(always)]
     pub(super) fn terms(&self) -> impl Iterator<Item = (usize, f64)> + '_ {
         self.idx[..self.n].iter().copied().zip(self.c[..self.n].iter().copied())
     }
 
     /// Σ_i c_i v_i.
+    #[inline(always)]
     pub(super) fn eval(&self, v: &[Vector3<f64>; NV]) -> Vector3<f64> {
         let mut out = Vector3::zeros();
         for (i, c) in self.terms() {
@@ -161,6 +163,7 @@ pub(super) struct Kinematics {
 impl Kinematics {
     /// Kinematic vectors of the state with displacements `u` and director `frames`, for
     /// reference vectors `r` (X̄_a, D_a, E⁰_k) with reference edge factors `phi0`.
+    #[inline(always)]
     pub(super) fn new(r: &[Vector3<f64>; NV], phi0: &[f64; 4], u: &[Vector3<f64>; 4], frames: &[DirectorFrame; 4]) -> Result<Self, ElementFailure> {
         let mut dv = [Vector3::zeros(); NV];
         for a in 0..4 {
@@ -190,6 +193,7 @@ impl Kinematics {
     /// Maps a gradient over the kinematic vectors to the director side of node a: the
     /// 3-vector g_{d_a} + Σ_k ±J_k g_{E_k} (+ when a is the edge's end node b, − when its
     /// start a).
+    #[inline(always)]
     pub(super) fn director_chain(&self, g: &[Vector3<f64>; NV]) -> [Vector3<f64>; 4] {
         let mut eff = [g[VD], g[VD + 1], g[VD + 2], g[VD + 3]];
         for (k, &(a, b)) in EDGES.iter().enumerate() {
@@ -205,6 +209,7 @@ impl Kinematics {
     /// Adds to the DOF-space row `out` the variation of y·p for the linear form `p` at fixed
     /// y: Σ_i c_i (∂V_i/∂DOF)ᵀ y, with δx̄_a = δu_a, δd_a = T_a δα_a and
     /// δE_k = J_k (T_b δα_b − T_a δα_a).
+    #[inline(always)]
     pub(super) fn chain_form(&self, p: &Lin, y: &Vector3<f64>, out: &mut [f64; ELEMENT_DOFS]) {
         for (i, c) in p.terms() {
             if i < VD {

@@ -140,6 +140,7 @@ pub struct ShellElement<'a> {
 
 /// Natural strain components [E_ξξ, E_ηη, E_ξη, E_ξζ, E_ηζ] of a point from the pair strains
 /// `e` of its level.
+#[inline(always)]
 fn natural_strain(comps: &[Comp; 5], e: &[f64; MAX_PAIRS]) -> Voigt5 {
     let mut nat = Voigt5::zeros();
     for (c, comp) in comps.iter().enumerate() {
@@ -151,6 +152,7 @@ fn natural_strain(comps: &[Comp; 5], e: &[f64; MAX_PAIRS]) -> Voigt5 {
 }
 
 /// Natural strain–DOF rows (5×20) of a point from the DOF-space rows of its level's pairs.
+#[inline(always)]
 fn natural_rows(comps: &[Comp; 5], rows: &[Row; MAX_PAIRS]) -> [Row; 5] {
     let mut bn = [[0.0; ELEMENT_DOFS]; 5];
     for (b, comp) in bn.iter_mut().zip(comps) {
@@ -165,6 +167,7 @@ fn natural_rows(comps: &[Comp; 5], rows: &[Row; MAX_PAIRS]) -> [Row; 5] {
 
 /// Adds the stresses `sn` conjugate to the natural components of a point to the stress
 /// weights σ of its level's pairs.
+#[inline(always)]
 fn add_pair_stress(comps: &[Comp; 5], sn: &Voigt5, sigma: &mut [f64; MAX_PAIRS]) {
     for (c, comp) in comps.iter().enumerate() {
         for (t, w) in comp.terms() {
@@ -219,7 +222,42 @@ impl<'a> ShellElement<'a> {
     /// Tangent = Σ BᵀDB (material, upper triangle) + Aᵀ(S⊗I)A (S_ij = Σ ½ σ (c^p_i c^q_j +
     /// c^q_i c^p_j), A = ∂V/∂DOF) + f·∂²V (second derivatives of the kinematic vectors:
     /// ∂²d_a = −(δα·Δα) d_a from the exponential map, and ∂²E_k = J_k ∂²v_k + ∂²F[δv_k, Δv_k]).
+    ///
+    /// On x86-64 CPUs with AVX2 the same code runs compiled for AVX2 (wider vectors for the
+    /// 20-wide row operations; no fused multiply–adds, so the results are bit-identical).
     pub fn response_into(
+        &self,
+        rule: &SectionRule,
+        geom: &ElementGeometry,
+        u: &[Vector3<f64>; 4],
+        frames: &[DirectorFrame; 4],
+        k: Option<&mut ElemMat>,
+    ) -> Result<(ElemVec, f64), ElementFailure> {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU supports AVX2, the only requirement of `response_avx2`.
+            return unsafe { self.response_avx2(rule, geom, u, frames, k) };
+        }
+        self.response_kernel(rule, geom, u, frames, k)
+    }
+
+    /// `response_kernel` compiled for AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn response_avx2(
+        &self,
+        rule: &SectionRule,
+        geom: &ElementGeometry,
+        u: &[Vector3<f64>; 4],
+        frames: &[DirectorFrame; 4],
+        k: Option<&mut ElemMat>,
+    ) -> Result<(ElemVec, f64), ElementFailure> {
+        self.response_kernel(rule, geom, u, frames, k)
+    }
+
+    /// The body of `response_into`.
+    #[inline(always)]
+    fn response_kernel(
         &self,
         rule: &SectionRule,
         geom: &ElementGeometry,

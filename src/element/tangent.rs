@@ -19,6 +19,7 @@ pub(super) type Upper = [[f64; ELEMENT_DOFS]; ELEMENT_DOFS];
 /// (C = DB with D symmetric makes BᵀC symmetric, so the lower half is the mirror image).
 /// Works on 4×4 tiles on and above the diagonal, each accumulated in registers over all
 /// rows r; entries below the diagonal inside diagonal tiles are written too and ignored.
+#[inline(always)]
 pub(super) fn add_upper_btc(k: &mut Upper, b: &[Row], c: &[Row]) {
     const T: usize = 4;
     for ib in (0..ELEMENT_DOFS).step_by(T) {
@@ -43,6 +44,7 @@ pub(super) fn add_upper_btc(k: &mut Upper, b: &[Row], c: &[Row]) {
 }
 
 /// Writes the symmetric matrix whose upper triangle is `u` into `k` (overwriting it).
+#[inline(always)]
 pub(super) fn mirror_into(u: &Upper, k: &mut ElemMat) {
     for j in 0..ELEMENT_DOFS {
         for i in 0..=j {
@@ -54,6 +56,7 @@ pub(super) fn mirror_into(u: &Upper, k: &mut ElemMat) {
 
 /// Adds σ·∂²(½ p·q) = ½σ (c^p ⊗ c^q + c^q ⊗ c^p) of the pair strain ½(p·q − P·Q) with stress
 /// weight σ to the second-derivative matrix `s` over the kinematic vectors.
+#[inline(always)]
 pub(super) fn add_pair_second_derivative(s: &mut [[f64; NV]; NV], p: &Lin, q: &Lin, sigma: f64) {
     let sw = 0.5 * sigma;
     for (i, ci) in p.terms() {
@@ -69,6 +72,7 @@ pub(super) fn add_pair_second_derivative(s: &mut [[f64; NV]; NV], p: &Lin, q: &L
 /// the kinematic vectors and `feff` their director-side sums (`Kinematics::director_chain`);
 /// ∂²d_a = −(δα·Δα) d_a from the exponential director map and ∂²E_k = J_k ∂²v_k +
 /// ∂²F[δv_k, Δv_k].
+#[inline(always)]
 pub(super) fn add_geometric_tangent(k: &mut ElemMat, s: &[[f64; NV]; NV], fv: &[Vector3<f64>; NV], feff: &[Vector3<f64>; 4], kin: &Kinematics, d: &[Vector3<f64>; 4]) {
     let (tm, jt) = (&kin.tm, &kin.jt);
     // Y[i][b] = Σ_j S_ij ∂V_j/∂α_b over the director-side vectors j.
