@@ -1,18 +1,29 @@
 //! Global assembly: the sparsity pattern is built once, values are scattered many times.
 //!
-//! Element residuals and tangents are computed in parallel (rayon) chunk by chunk; each
-//! element keeps a precomputed map from its 20×20 entries to slots of the upper triangle of
-//! the CSC matrix, so a Newton iteration only zeroes and adds values (fenris style).
+//! Each element keeps a precomputed map from its 20×20 entries to slots of the upper
+//! triangle of the CSC matrix, so a Newton iteration only zeroes and adds values (fenris
+//! style). Elements are coloured once so that no two elements of a colour share a node; the
+//! elements of a colour are evaluated and scattered in parallel (rayon) without locks, since
+//! they write disjoint slots and disjoint force entries, colour after colour. Elements with
+//! tied DOFs (whose entries go through the constraint weights to other nodes' equations)
+//! are assembled serially afterwards. Every slot receives its contributions in the same
+//! order whatever the number of threads, so the assembly is deterministic.
 
 use std::time::Instant;
 
 use rayon::prelude::*;
 
-use crate::element::{ElementFailure, ElementGeometry, ElementOutput, SectionRule, ELEMENT_DOFS, NODE_DOFS};
+use std::sync::Mutex;
+
+use crate::element::{ElemMat, ElemVec, ElementFailure, ElementGeometry, SectionRule, ELEMENT_DOFS, NODE_DOFS};
 use crate::model::{Model, State, FIXED, UNTIED};
 
 const NO_SLOT: u32 = u32::MAX;
-const CHUNK: usize = 2048;
+/// Largest number of element colours (a node's colours are a 64-bit mask); elements that
+/// find no free colour are assembled serially.
+const MAX_COLOURS: usize = 64;
+/// Fewest elements a rayon task takes.
+const MIN_TASK: usize = 32;
 
 /// Upper-triangular CSC pattern of the free-DOF tangent.
 #[derive(Clone, Debug)]
@@ -77,6 +88,60 @@ pub struct Assembler {
     /// expansions of local DOFs i and j), weighted at every assembly with the current
     /// weights instead of through `tied`. Empty for other elements.
     linked: Vec<Vec<(u16, u32, u8, u8)>>,
+    /// Elements without tied DOFs grouped by colour: no two elements of a colour share a
+    /// node, so their slots and force entries are disjoint.
+    colours: Vec<Vec<usize>>,
+    /// Elements assembled serially after the colours (tied DOFs, or no colour left).
+    serial: Vec<usize>,
+}
+
+/// Greedy colouring of the elements in index order: each element takes the lowest colour
+/// that none of the elements already coloured at its nodes has. Elements marked in
+/// `exclude`, and any element that finds no colour below [`MAX_COLOURS`], go to the serial
+/// list. Returns (colours, serial).
+fn colour_elements(model: &Model, exclude: &[bool]) -> (Vec<Vec<usize>>, Vec<usize>) {
+    let mut used = vec![0u64; model.n_nodes()];
+    let mut colours: Vec<Vec<usize>> = Vec::new();
+    let mut serial = Vec::new();
+    for (e, el) in model.elements.iter().enumerate() {
+        let taken = el.nodes.iter().fold(0u64, |m, &n| m | used[n]);
+        let c = taken.trailing_ones() as usize;
+        if exclude[e] || c >= MAX_COLOURS {
+            serial.push(e);
+            continue;
+        }
+        for &n in &el.nodes {
+            used[n] |= 1 << c;
+        }
+        if colours.len() <= c {
+            colours.resize_with(c + 1, Vec::new);
+        }
+        colours[c].push(e);
+    }
+    (colours, serial)
+}
+
+/// A pointer to assembly output shared by the tasks of one colour. Sound only because the
+/// tasks of a colour write disjoint entries (see [`colour_elements`]).
+#[derive(Clone, Copy)]
+struct Shared(*mut f64);
+
+// SAFETY: the pointer is only dereferenced at indices that no other task of the same colour
+// touches while the colour is being assembled (elements of a colour share no node).
+unsafe impl Send for Shared {}
+// SAFETY: as above.
+unsafe impl Sync for Shared {}
+
+impl Shared {
+    /// Adds `v` to entry `i`.
+    ///
+    /// # Safety
+    /// `i` is in bounds of the slice the pointer came from, and no other thread accesses
+    /// entry `i` concurrently.
+    unsafe fn add(self, i: usize, v: f64) {
+        // SAFETY: guaranteed by the caller.
+        unsafe { *self.0.add(i) += v }
+    }
 }
 
 
@@ -253,7 +318,9 @@ impl Assembler {
                 Err(f) => Err(f.clone()),
             })
             .collect();
-        Self { pattern, slots, rules, geometry, tied, linked }
+        let constrained: Vec<bool> = model.elements.iter().map(|el| is_tied(el)).collect();
+        let (colours, serial) = colour_elements(model, &constrained);
+        Self { pattern, slots, rules, geometry, tied, linked, colours, serial }
     }
 
     /// Number of stored entries of the upper triangle.
@@ -261,8 +328,79 @@ impl Assembler {
         self.pattern.row_idx.len()
     }
 
+    /// Number of element colours of the parallel assembly (elements of a colour share no node).
+    pub fn n_colours(&self) -> usize {
+        self.colours.len()
+    }
+
+    /// Internal force, energy and (when `k` is given) tangent of element `e` in `state`.
+    /// The tangent is left in `k` as a full 20×20 matrix, so it can be transformed before
+    /// [`Assembler::scatter`].
+    pub fn element_response(&self, model: &Model, state: &State, e: usize, k: Option<&mut ElemMat>) -> Result<(ElemVec, f64), AssemblyFailure> {
+        let def = &model.elements[e];
+        let x = def.nodes.map(|n| state.u[n]);
+        let frames = def.nodes.map(|n| state.frames[n]);
+        let fail = |failure: ElementFailure| AssemblyFailure { element: e, failure };
+        let rule = self.rules[def.section].as_ref().map_err(|f| fail(f.clone()))?;
+        let geom = self.geometry[e].as_ref().map_err(|f| fail(f.clone()))?;
+        model.element(e).response_into(rule, geom, &x, &frames, k).map_err(fail)
+    }
+
+    /// Adds element `e`'s force to `f_int` and its tangent `k` (if any) to the matrix values,
+    /// both given as [`Shared`] pointers, through its direct slots only.
+    ///
+    /// # Safety
+    /// `f_int` points to the force vector (5 × nodes entries), `values` to the matrix values
+    /// (nnz entries), and no other thread touches the entries of element `e`'s nodes.
+    unsafe fn scatter_direct(&self, model: &Model, e: usize, force: &ElemVec, k: Option<&ElemMat>, f_int: Shared, values: Option<Shared>) {
+        let nodes = model.elements[e].nodes;
+        for (i, &f) in force.iter().enumerate() {
+            // SAFETY: a DOF of element e's node, in bounds and exclusive (caller).
+            unsafe { f_int.add(NODE_DOFS * nodes[i / NODE_DOFS] + i % NODE_DOFS, f) };
+        }
+        if let (Some(v), Some(k)) = (values, k) {
+            let slots = &self.slots[e];
+            for j in 0..ELEMENT_DOFS {
+                for i in 0..ELEMENT_DOFS {
+                    let s = slots[i * ELEMENT_DOFS + j];
+                    if s != NO_SLOT {
+                        // SAFETY: a slot of a pair of element e's equations, exclusive (caller).
+                        unsafe { v.add(s as usize, k[(i, j)]) };
+                    }
+                }
+            }
+        }
+    }
+
+    /// Adds element `e`'s force and tangent (if any) to `f_int` and `values`, through its
+    /// direct slots and its tied and linked entries (Tᵀ K T).
+    pub fn scatter(&self, model: &Model, e: usize, force: &ElemVec, k: Option<&ElemMat>, f_int: &mut [f64], mut values: Option<&mut [f64]>) {
+        let f_ptr = Shared(f_int.as_mut_ptr());
+        let v_ptr = values.as_deref_mut().map(|v| Shared(v.as_mut_ptr()));
+        // SAFETY: the pointers come from the exclusive borrows above, held for the call.
+        unsafe { self.scatter_direct(model, e, force, k, f_ptr, v_ptr) };
+        let (Some(v), Some(k)) = (values, k) else { return };
+        for &(ij, s, w) in &self.tied[e] {
+            let ij = ij as usize;
+            v[s as usize] += w * k[(ij / ELEMENT_DOFS, ij % ELEMENT_DOFS)];
+        }
+        if !self.linked[e].is_empty() {
+            let nodes = model.elements[e].nodes;
+            let weights: Vec<Vec<f64>> = nodes
+                .iter()
+                .flat_map(|&n| (0..NODE_DOFS).map(move |k| NODE_DOFS * n + k))
+                .map(|g| model.dofs.expand(g).into_iter().map(|(_, w)| w).collect())
+                .collect();
+            for &(ij, s, a, b) in &self.linked[e] {
+                let (i, j) = (ij as usize / ELEMENT_DOFS, ij as usize % ELEMENT_DOFS);
+                v[s as usize] += weights[i][a as usize] * weights[j][b as usize] * k[(i, j)];
+            }
+        }
+    }
+
     /// Assembles the internal force over all DOFs into `f_int` and, when `values` is given,
-    /// the tangent's upper triangle into `values` (both overwritten).
+    /// the tangent's upper triangle into `values` (both overwritten). Without `values` only
+    /// forces and energies are evaluated (the residual-only path).
     pub fn assemble(
         &self,
         model: &Model,
@@ -277,58 +415,51 @@ impl Assembler {
         if let Some(v) = values.as_deref_mut() {
             v.iter_mut().for_each(|x| *x = 0.0);
         }
-        let mut energy = 0.0;
         let n_el = model.elements.len();
-        let mut start = 0;
-        while start < n_el {
-            let end = (start + CHUNK).min(n_el);
-            let outputs: Vec<Result<ElementOutput, AssemblyFailure>> = (start..end)
-                .into_par_iter()
-                .map(|e| {
-                    let def = &model.elements[e];
-                    let x = def.nodes.map(|n| state.u[n]);
-                    let frames = def.nodes.map(|n| state.frames[n]);
-                    let rule = self.rules[def.section].as_ref().map_err(|f| AssemblyFailure { element: e, failure: f.clone() })?;
-                    let geom = self.geometry[e].as_ref().map_err(|f| AssemblyFailure { element: e, failure: f.clone() })?;
-                    model.element(e).response_with(rule, geom, &x, &frames, with_tangent).map_err(|failure| AssemblyFailure { element: e, failure })
-                })
-                .collect();
-            for (e, out) in (start..end).zip(outputs) {
-                let out = out?;
-                energy += out.energy;
-                let nodes = model.elements[e].nodes;
-                for i in 0..ELEMENT_DOFS {
-                    f_int[NODE_DOFS * nodes[i / NODE_DOFS] + i % NODE_DOFS] += out.force[i];
-                }
-                if let (Some(v), Some(k)) = (values.as_deref_mut(), out.stiffness.as_ref()) {
-                    let slots = &self.slots[e];
-                    for j in 0..ELEMENT_DOFS {
-                        for i in 0..ELEMENT_DOFS {
-                            let s = slots[i * ELEMENT_DOFS + j];
-                            if s != NO_SLOT {
-                                v[s as usize] += k[(i, j)];
-                            }
-                        }
-                    }
-                    for &(ij, s, w) in &self.tied[e] {
-                        let ij = ij as usize;
-                        v[s as usize] += w * k[(ij / ELEMENT_DOFS, ij % ELEMENT_DOFS)];
-                    }
-                    if !self.linked[e].is_empty() {
-                        let weights: Vec<Vec<f64>> = nodes
-                            .iter()
-                            .flat_map(|&n| (0..NODE_DOFS).map(move |k| NODE_DOFS * n + k))
-                            .map(|g| model.dofs.expand(g).into_iter().map(|(_, w)| w).collect())
-                            .collect();
-                        for &(ij, s, a, b) in &self.linked[e] {
-                            let (i, j) = (ij as usize / ELEMENT_DOFS, ij as usize % ELEMENT_DOFS);
-                            v[s as usize] += weights[i][a as usize] * weights[j][b as usize] * k[(i, j)];
-                        }
-                    }
-                }
+        assert!(f_int.len() >= NODE_DOFS * model.n_nodes() && values.as_deref().is_none_or(|v| v.len() >= self.nnz()), "assembly output too short");
+        let mut energies = vec![0.0; n_el];
+        let e_ptr = Shared(energies.as_mut_ptr());
+        let f_ptr = Shared(f_int.as_mut_ptr());
+        let v_ptr = values.as_deref_mut().map(|v| Shared(v.as_mut_ptr()));
+        // The failure of the lowest-numbered failing element.
+        let failure: Mutex<Option<AssemblyFailure>> = Mutex::new(None);
+        let record = |f: AssemblyFailure| {
+            let mut slot = failure.lock().unwrap_or_else(|p| p.into_inner());
+            if slot.as_ref().is_none_or(|g| f.element < g.element) {
+                *slot = Some(f);
             }
-            start = end;
+        };
+        for colour in &self.colours {
+            colour.par_iter().with_min_len(MIN_TASK).for_each(|&e| {
+                let mut k = ElemMat::zeros();
+                match self.element_response(model, state, e, with_tangent.then_some(&mut k)) {
+                    Ok((force, energy)) => {
+                        // SAFETY: elements of a colour share no node and have no tied DOFs, so
+                        // their force entries, matrix slots and energy entries are disjoint;
+                        // the pointers come from exclusive borrows held for the whole loop.
+                        unsafe {
+                            e_ptr.add(e, energy);
+                            self.scatter_direct(model, e, &force, with_tangent.then_some(&k), f_ptr, v_ptr);
+                        }
+                    }
+                    Err(f) => record(f),
+                }
+            });
         }
+        let mut k = ElemMat::zeros();
+        for &e in &self.serial {
+            match self.element_response(model, state, e, with_tangent.then_some(&mut k)) {
+                Ok((force, energy)) => {
+                    energies[e] = energy;
+                    self.scatter(model, e, &force, with_tangent.then_some(&k), f_int, values.as_deref_mut());
+                }
+                Err(f) => record(f),
+            }
+        }
+        if let Some(f) = failure.into_inner().unwrap_or_else(|p| p.into_inner()) {
+            return Err(f);
+        }
+        let energy = energies.iter().fold(0.0, |s, e| s + e);
         model.dofs.fold(f_int);
         Ok(AssemblyInfo { energy, seconds: t0.elapsed().as_secs_f64() })
     }
