@@ -28,8 +28,6 @@ struct Full {
     stress: Matrix3<f64>,
     /// 6×6 tangent (zero unless requested).
     tangent: SMatrix<f64, 6, 6>,
-    /// ℂ3333, always computed (the plane-stress iteration's slope is ½ ℂ3333).
-    c3333: f64,
     energy: f64,
 }
 
@@ -39,9 +37,9 @@ impl NeoHookean {
         Self { bulk, shear }
     }
 
-    /// Stress, 6×6 Voigt tangent (engineering shear, when `with_tangent`), ℂ3333 and energy
-    /// at right Cauchy–Green C.
-    fn full(&self, c: &Matrix3<f64>, with_tangent: bool) -> Result<Full, MaterialFailure> {
+    /// Stress, 6×6 Voigt tangent (engineering shear, when `with_tangent`) and energy
+    /// (when `with_energy`) at right Cauchy–Green C.
+    fn full(&self, c: &Matrix3<f64>, with_tangent: bool, with_energy: bool) -> Result<Full, MaterialFailure> {
         let det = c.determinant();
         if !(det > 0.0) || !det.is_finite() {
             return Err(MaterialFailure::Inverted { det_c: det });
@@ -49,30 +47,33 @@ impl NeoHookean {
         let ci = c.try_inverse().ok_or(MaterialFailure::Inverted { det_c: det })?;
         let (k, mu) = (self.bulk, self.shear);
         let j2 = det;
-        let j = det.sqrt();
         let i1 = c.trace();
         let jm23 = det.powf(-1.0 / 3.0);
         let stress = ci * (0.5 * k * (j2 - 1.0)) + (Matrix3::identity() - ci * (i1 / 3.0)) * (mu * jm23);
         let a = k * j2 + 2.0 / 9.0 * mu * jm23 * i1;
         let b = k * (j2 - 1.0) - 2.0 / 3.0 * mu * jm23 * i1;
         let cc = 2.0 / 3.0 * mu * jm23;
-        let delta = |i: usize, j: usize| if i == j { 1.0 } else { 0.0 };
         let mut tangent = SMatrix::<f64, 6, 6>::zeros();
-        let c3333 = a * ci[(2, 2)] * ci[(2, 2)] - b * 0.5 * (ci[(2, 2)] * ci[(2, 2)] + ci[(2, 2)] * ci[(2, 2)]) - cc * (ci[(2, 2)] + ci[(2, 2)]);
-        for (p, &(i, jj)) in PAIRS.iter().enumerate().filter(|_| with_tangent) {
-            for (q, &(kk, l)) in PAIRS.iter().enumerate() {
-                tangent[(p, q)] = a * ci[(i, jj)] * ci[(kk, l)]
-                    - b * 0.5 * (ci[(i, kk)] * ci[(jj, l)] + ci[(i, l)] * ci[(jj, kk)])
-                    - cc * (delta(i, jj) * ci[(kk, l)] + ci[(i, jj)] * delta(kk, l));
+        if with_tangent {
+            // ℂ = a C⁻¹⊗C⁻¹ − b C⁻¹⊙C⁻¹ − c (I⊗C⁻¹ + C⁻¹⊗I), symmetric in (p, q).
+            let cv: [f64; 6] = PAIRS.map(|(i, j)| ci[(i, j)]);
+            const DIAG: [f64; 6] = [1.0, 1.0, 1.0, 0.0, 0.0, 0.0];
+            for (p, &(i, jj)) in PAIRS.iter().enumerate() {
+                for (q, &(kk, l)) in PAIRS.iter().enumerate().skip(p) {
+                    let v = a * cv[p] * cv[q] - b * 0.5 * (ci[(i, kk)] * ci[(jj, l)] + ci[(i, l)] * ci[(jj, kk)]) - cc * (DIAG[p] * cv[q] + cv[p] * DIAG[q]);
+                    tangent[(p, q)] = v;
+                    tangent[(q, p)] = v;
+                }
             }
         }
-        let energy = 0.25 * k * (j2 - 1.0) - 0.5 * k * j.ln() + 0.5 * mu * (jm23 * i1 - 3.0);
-        Ok(Full { stress, tangent, c3333, energy })
+        let energy = if with_energy { 0.25 * k * (j2 - 1.0) - 0.25 * k * det.ln() + 0.5 * mu * (jm23 * i1 - 3.0) } else { 0.0 };
+        Ok(Full { stress, tangent, energy })
     }
-}
 
-impl ShellMaterial for NeoHookean {
-    fn response(&self, strain: &Voigt5) -> Result<PointResponse, MaterialFailure> {
+    /// Solves the plane-stress condition S33(C33) = 0 for the lamina strain `strain` by a
+    /// safeguarded Newton iteration and returns the converged state (tangent when
+    /// `with_tangent`, energy always).
+    fn plane_stress(&self, strain: &Voigt5, with_tangent: bool) -> Result<Full, MaterialFailure> {
         if strain.iter().any(|v| !v.is_finite()) {
             return Err(MaterialFailure::NotFinite);
         }
@@ -101,22 +102,27 @@ impl ShellMaterial for NeoHookean {
         let mut hi = f64::INFINITY;
         let mut c33 = ((1.0 - r0) / minor).max(c33_min + 1e-8 * (1.0 + c33_min.abs()));
         let tol = 1e-13 * (self.bulk + self.shear);
-        let mut full = None;
+        let (k, mu) = (self.bulk, self.shear);
+        let i1_plane = c[(0, 0)] + c[(1, 1)];
         for _ in 0..100 {
             c[(2, 2)] = c33;
-            let f = match self.full(&c, false) {
-                Ok(f) => f,
-                Err(_) => {
-                    lo = lo.max(c33);
-                    c33 = if hi.is_finite() { 0.5 * (lo + hi) } else { 2.0 * c33 + 1e-8 };
-                    continue;
-                }
-            };
-            let s33 = f.stress[(2, 2)];
+            // S33 and ℂ3333 from the affine det C = C33·minor + r0 and (C⁻¹)33 = minor/det C.
+            let det = c33 * minor + r0;
+            if !(det > 0.0) || !det.is_finite() {
+                lo = lo.max(c33);
+                c33 = if hi.is_finite() { 0.5 * (lo + hi) } else { 2.0 * c33 + 1e-8 };
+                continue;
+            }
+            let ci33 = minor / det;
+            let i1 = i1_plane + c33;
+            let jm23 = det.powf(-1.0 / 3.0);
+            let s33 = 0.5 * k * (det - 1.0) * ci33 + mu * jm23 * (1.0 - i1 / 3.0 * ci33);
+            let a = k * det + 2.0 / 9.0 * mu * jm23 * i1;
+            let b = k * (det - 1.0) - 2.0 / 3.0 * mu * jm23 * i1;
+            let c3333 = (a - b) * ci33 * ci33 - 4.0 / 3.0 * mu * jm23 * ci33;
             if s33.abs() <= tol {
-                // Same C as the converged iterate: the full tangent only once.
-                full = Some(self.full(&c, true)?);
-                break;
+                // Same C as the converged iterate: tangent and energy only once.
+                return self.full(&c, with_tangent, true);
             }
             if s33 > 0.0 {
                 hi = hi.min(c33);
@@ -124,21 +130,28 @@ impl ShellMaterial for NeoHookean {
                 lo = lo.max(c33);
             }
             // dS33/dC33 = ½ ℂ3333.
-            let slope = 0.5 * f.c3333;
+            let slope = 0.5 * c3333;
             let mut next = c33 - s33 / slope;
             if !(slope > 0.0) || !(next > lo && next < hi) {
                 next = if hi.is_finite() { 0.5 * (lo + hi) } else { 2.0 * c33 };
             }
             c33 = next;
         }
-        let f = match full {
-            Some(f) => f,
-            None => {
-                c[(2, 2)] = c33;
-                let residual = self.full(&c, false).map(|f| f.stress[(2, 2)].abs()).unwrap_or(f64::NAN);
-                return Err(MaterialFailure::PlaneStress { residual });
-            }
-        };
+        c[(2, 2)] = c33;
+        let residual = self.full(&c, false, false).map(|f| f.stress[(2, 2)].abs()).unwrap_or(f64::NAN);
+        Err(MaterialFailure::PlaneStress { residual })
+    }
+
+    /// Lamina stress [S11, S22, S12, S13, S23] of a full state.
+    fn lamina_stress(f: &Full) -> Voigt5 {
+        let s = &f.stress;
+        Voigt5::new(s[(0, 0)], s[(1, 1)], s[(0, 1)], s[(0, 2)], s[(1, 2)])
+    }
+}
+
+impl ShellMaterial for NeoHookean {
+    fn response(&self, strain: &Voigt5) -> Result<PointResponse, MaterialFailure> {
+        let f = self.plane_stress(strain, true)?;
         let d33 = f.tangent[(2, 2)];
         let mut tangent = Tangent5::zeros();
         for (p, &i) in KEPT.iter().enumerate() {
@@ -146,9 +159,12 @@ impl ShellMaterial for NeoHookean {
                 tangent[(p, q)] = f.tangent[(i, j)] - f.tangent[(i, 2)] * f.tangent[(2, j)] / d33;
             }
         }
-        let s = &f.stress;
-        let stress = Voigt5::new(s[(0, 0)], s[(1, 1)], s[(0, 1)], s[(0, 2)], s[(1, 2)]);
-        Ok(PointResponse { stress, tangent, energy: f.energy })
+        Ok(PointResponse { stress: Self::lamina_stress(&f), tangent, energy: f.energy })
+    }
+
+    fn stress_at(&self, strain: &Voigt5, _zeta: f64) -> Result<(Voigt5, f64), MaterialFailure> {
+        let f = self.plane_stress(strain, false)?;
+        Ok((Self::lamina_stress(&f), f.energy))
     }
 
     fn small_strain_moduli(&self) -> (f64, f64) {
