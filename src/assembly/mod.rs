@@ -430,16 +430,15 @@ impl Assembler {
             }
         };
         for colour in &self.colours {
-            colour.par_iter().with_min_len(MIN_TASK).for_each(|&e| {
-                let mut k = ElemMat::zeros();
-                match self.element_response(model, state, e, with_tangent.then_some(&mut k)) {
+            colour.par_iter().with_min_len(MIN_TASK).for_each_init(ElemMat::zeros, |k, &e| {
+                match self.element_response(model, state, e, with_tangent.then_some(&mut *k)) {
                     Ok((force, energy)) => {
                         // SAFETY: elements of a colour share no node and have no tied DOFs, so
                         // their force entries, matrix slots and energy entries are disjoint;
                         // the pointers come from exclusive borrows held for the whole loop.
                         unsafe {
                             e_ptr.add(e, energy);
-                            self.scatter_direct(model, e, &force, with_tangent.then_some(&k), f_ptr, v_ptr);
+                            self.scatter_direct(model, e, &force, with_tangent.then_some(&*k), f_ptr, v_ptr);
                         }
                     }
                     Err(f) => record(f),

@@ -55,7 +55,7 @@ use super::kinematics::{Kinematics, NV};
 use super::quadrature::{bilinear, gauss_legendre};
 use super::rule::{Comp, RulePoint, MAX_FORMS, MAX_PAIRS};
 pub use super::rule::{ElementGeometry, SectionRule};
-use super::tangent::{add_geometric_tangent, add_pair_second_derivative, add_upper_btc, mirror_into, Row, Upper};
+use super::tangent::{add_geometric_tangent, add_pair_second_derivative, add_upper_btc, mirror_into, symmetric_part, Row, Upper};
 use super::ELEMENT_DOFS;
 use crate::material::{MaterialFailure, ShellMaterial, Voigt5};
 
@@ -278,9 +278,10 @@ impl<'a> ShellElement<'a> {
         }
         let mut upper: Upper = [[0.0; ELEMENT_DOFS]; ELEMENT_DOFS];
         let mut energy = 0.0;
-        // Generalised forces on the kinematic vectors and the second-derivative matrix S.
+        // Generalised forces on the kinematic vectors and the second-derivative matrix
+        // S = X + Xᵀ over them.
         let mut fv = [Vector3::zeros(); NV];
-        let mut s = [[0.0; NV]; NV];
+        let mut x = [[0.0; NV]; NV];
         let mut first_point = 0;
         for (level, centre_geom) in rule.levels.iter().zip(geom.centres.iter()) {
             let pairs = &level.pairs;
@@ -382,7 +383,7 @@ impl<'a> ShellElement<'a> {
                     fv[i] += pc * (half * ci);
                 }
                 if with_tangent {
-                    add_pair_second_derivative(&mut s, lp, lq, sg);
+                    add_pair_second_derivative(&mut x, lp, lq, sg);
                 }
             }
         }
@@ -398,7 +399,7 @@ impl<'a> ShellElement<'a> {
         if let Some(k) = k.as_deref_mut() {
             mirror_into(&upper, k);
             let d = frames.map(|f| f.d);
-            add_geometric_tangent(k, &s, &fv, &feff, &kin, &d);
+            add_geometric_tangent(k, &symmetric_part(&x), &fv, &feff, &kin, &d);
         }
         Ok((force, energy))
     }

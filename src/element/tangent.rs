@@ -54,18 +54,28 @@ pub(super) fn mirror_into(u: &Upper, k: &mut ElemMat) {
     }
 }
 
-/// Adds σ·∂²(½ p·q) = ½σ (c^p ⊗ c^q + c^q ⊗ c^p) of the pair strain ½(p·q − P·Q) with stress
-/// weight σ to the second-derivative matrix `s` over the kinematic vectors.
+/// Adds ½σ c^p ⊗ c^q of the pair strain ½(p·q − P·Q) with stress weight σ to `x`, the
+/// non-symmetric half of the second-derivative matrix over the kinematic vectors:
+/// σ·∂²(½ p·q) = ½σ (c^p ⊗ c^q + c^q ⊗ c^p), so S = X + Xᵀ (see [`symmetric_part`]).
 #[inline(always)]
-pub(super) fn add_pair_second_derivative(s: &mut [[f64; NV]; NV], p: &Lin, q: &Lin, sigma: f64) {
+pub(super) fn add_pair_second_derivative(x: &mut [[f64; NV]; NV], p: &Lin, q: &Lin, sigma: f64) {
     let sw = 0.5 * sigma;
+    let mut qd = [0.0; NV];
+    for (j, cj) in q.terms() {
+        qd[j] += cj;
+    }
     for (i, ci) in p.terms() {
-        for (j, cj) in q.terms() {
-            let v = sw * ci * cj;
-            s[i][j] += v;
-            s[j][i] += v;
+        let f = sw * ci;
+        for (xij, qj) in x[i].iter_mut().zip(&qd) {
+            *xij += f * qj;
         }
     }
+}
+
+/// S = X + Xᵀ.
+#[inline(always)]
+pub(super) fn symmetric_part(x: &[[f64; NV]; NV]) -> [[f64; NV]; NV] {
+    std::array::from_fn(|i| std::array::from_fn(|j| x[i][j] + x[j][i]))
 }
 
 /// Adds Aᵀ(S⊗I)A and the f·∂²V terms to the tangent `k`: `fv` are the generalised forces on
