@@ -318,8 +318,13 @@ impl<'a> ShellElement<'a> {
             }
             let mut sigma = [0.0; MAX_PAIRS];
             let mut sn_c = Voigt5::zeros();
-            let mut b_stack: [Row; 20] = [[0.0; ELEMENT_DOFS]; 20];
-            let mut db_stack: [Row; 20] = [[0.0; ELEMENT_DOFS]; 20];
+            // Rows of B (per point: E11, E22, 2E13, 2E23) and of DB for Σ BᵀDB; the 2E12 row
+            // is the level's, common to its points, so it enters once with Σ (DB)₂ (the last
+            // stacked row).
+            const STACK: usize = 17;
+            let mut b_stack: [Row; STACK] = [[0.0; ELEMENT_DOFS]; STACK];
+            let mut db_stack: [Row; STACK] = [[0.0; ELEMENT_DOFS]; STACK];
+            let mut db_shear: Row = [0.0; ELEMENT_DOFS];
             let mut n_rows = 0;
             for (rp, pg) in level.points.iter().zip(points) {
                 let nat = natural_strain(&rp.comps, &e);
@@ -337,10 +342,10 @@ impl<'a> ShellElement<'a> {
                 let sn = pg.m.transpose() * sw;
                 sn_c += pg.mc.transpose() * sw[2];
                 add_pair_stress(&rp.comps, &sn, &mut sigma);
-                if let (Some(d), true) = (tangent, n_rows + 5 <= b_stack.len()) {
+                if let (Some(d), true) = (tangent, n_rows + 4 < STACK) {
                     // B = M Bn (row 2E12 from the centre), DB with D weighted by w det J.
                     let bn = natural_rows(&rp.comps, &rows);
-                    let b = &mut b_stack[n_rows..n_rows + 5];
+                    let mut b: [Row; 5] = [[0.0; ELEMENT_DOFS]; 5];
                     for (r, br) in b.iter_mut().enumerate() {
                         if r == 2 {
                             *br = b_shear;
@@ -352,21 +357,28 @@ impl<'a> ShellElement<'a> {
                         }
                     }
                     let d = d * pg.wdet;
+                    let mut slot = n_rows;
                     for r in 0..5 {
-                        let dbr = &mut db_stack[n_rows + r];
+                        let dbr = if r == 2 { &mut db_shear } else { &mut db_stack[slot] };
                         for (q, bq) in b.iter().enumerate() {
                             let dq = d[(r, q)];
                             if dq != 0.0 {
                                 dbr.iter_mut().zip(bq).for_each(|(x, y)| *x += dq * y);
                             }
                         }
+                        if r != 2 {
+                            b_stack[slot] = b[r];
+                            slot += 1;
+                        }
                     }
-                    n_rows += 5;
+                    n_rows = slot;
                 }
             }
             add_pair_stress(&level.centre.comps, &sn_c, &mut sigma);
             if with_tangent {
-                add_upper_btc(&mut upper, &b_stack[..n_rows], &db_stack[..n_rows]);
+                b_stack[n_rows] = b_shear;
+                db_stack[n_rows] = db_shear;
+                add_upper_btc(&mut upper, &b_stack[..n_rows + 1], &db_stack[..n_rows + 1]);
             }
             // Gradients and second derivatives of the pair strains, weighted by σ.
             for (&sg, &(p, q)) in sigma.iter().zip(pairs) {
