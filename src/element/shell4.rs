@@ -283,6 +283,12 @@ impl<'a> ShellElement<'a> {
         let mut fv = [Vector3::zeros(); NV];
         let mut x = [[0.0; NV]; NV];
         let mut first_point = 0;
+        // Scratch of the tangent, reused level after level: the pairs' DOF-space rows and the
+        // stacked rows of B and DB (per point E11, E22, 2E13, 2E23; the level's 2E12 row last).
+        const STACK: usize = 17;
+        let mut rows: [Row; MAX_PAIRS] = [[0.0; ELEMENT_DOFS]; MAX_PAIRS];
+        let mut b_stack: [Row; STACK] = [[0.0; ELEMENT_DOFS]; STACK];
+        let mut db_stack: [Row; STACK] = [[0.0; ELEMENT_DOFS]; STACK];
         for (level, centre_geom) in rule.levels.iter().zip(geom.centres.iter()) {
             let pairs = &level.pairs;
             let current = |f: usize| geom.forms[f] + df[f];
@@ -292,9 +298,9 @@ impl<'a> ShellElement<'a> {
                 *et = 0.5 * (pr.dot(&dq) + dp.dot(&qr) + dp.dot(&dq));
             }
             // DOF-space rows of the pairs: ∂(½ p·q)/∂DOF.
-            let mut rows: [Row; MAX_PAIRS] = [[0.0; ELEMENT_DOFS]; MAX_PAIRS];
             if with_tangent {
                 for (row, &(p, q)) in rows.iter_mut().zip(pairs) {
+                    *row = [0.0; ELEMENT_DOFS];
                     if p == q {
                         kin.chain_form(&rule.forms[p], &current(p), row);
                     } else {
@@ -318,12 +324,8 @@ impl<'a> ShellElement<'a> {
             }
             let mut sigma = [0.0; MAX_PAIRS];
             let mut sn_c = Voigt5::zeros();
-            // Rows of B (per point: E11, E22, 2E13, 2E23) and of DB for Σ BᵀDB; the 2E12 row
-            // is the level's, common to its points, so it enters once with Σ (DB)₂ (the last
-            // stacked row).
-            const STACK: usize = 17;
-            let mut b_stack: [Row; STACK] = [[0.0; ELEMENT_DOFS]; STACK];
-            let mut db_stack: [Row; STACK] = [[0.0; ELEMENT_DOFS]; STACK];
+            // Σ BᵀDB over the level's points: the 2E12 row is the level's, common to its
+            // points, so it enters once with Σ (DB)₂ (the last stacked row).
             let mut db_shear: Row = [0.0; ELEMENT_DOFS];
             let mut n_rows = 0;
             for (rp, pg) in level.points.iter().zip(points) {
@@ -359,15 +361,18 @@ impl<'a> ShellElement<'a> {
                     let d = d * pg.wdet;
                     let mut slot = n_rows;
                     for r in 0..5 {
-                        let dbr = if r == 2 { &mut db_shear } else { &mut db_stack[slot] };
+                        let mut dbr: Row = [0.0; ELEMENT_DOFS];
                         for (q, bq) in b.iter().enumerate() {
                             let dq = d[(r, q)];
                             if dq != 0.0 {
                                 dbr.iter_mut().zip(bq).for_each(|(x, y)| *x += dq * y);
                             }
                         }
-                        if r != 2 {
+                        if r == 2 {
+                            db_shear.iter_mut().zip(&dbr).for_each(|(x, y)| *x += y);
+                        } else {
                             b_stack[slot] = b[r];
+                            db_stack[slot] = dbr;
                             slot += 1;
                         }
                     }
