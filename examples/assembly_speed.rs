@@ -178,11 +178,19 @@ fn scene(path: &str, repeats: usize) -> Result<(), String> {
     model.update(&mut state, &du, 1.0);
     let mut f = vec![0.0; 5 * model.n_nodes()];
     let mut vals = vec![0.0; asm.nnz()];
+    // ASSEMBLY_FLUSH=1: sweep 256 MB between assemblies (cold caches, as inside Newton).
+    let flush = std::env::var_os("ASSEMBLY_FLUSH").is_some();
+    let mut sweep = if flush { vec![0.0f64; 32 << 20] } else { Vec::new() };
     for threads in [1, 2] {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().map_err(|e| e.to_string())?;
         for with_tangent in [true, false] {
             let mut times = Vec::new();
             for _ in 0..repeats {
+                if flush {
+                    // Evict the caches as a factorization between two assemblies does.
+                    sweep.iter_mut().for_each(|v| *v += 1.0);
+                    std::hint::black_box(&sweep);
+                }
                 let t = Instant::now();
                 let values = if with_tangent { Some(vals.as_mut_slice()) } else { None };
                 pool.install(|| asm.assemble(model, &state, &mut f, values)).map_err(|e| format!("element {}: {}", e.element, e.failure))?;

@@ -463,3 +463,57 @@ impl Assembler {
         Ok(AssemblyInfo { energy, seconds: t0.elapsed().as_secs_f64() })
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use std::collections::HashSet;
+
+    use super::*;
+    use crate::scene;
+
+    /// On a plain plate and on a two-panel sleeve with tied (non-matching) seams: every
+    /// element is assembled exactly once, no two elements of a colour share a node, tied
+    /// elements are in the serial list, and the assembly (forces, tangent values, energy) is
+    /// the same bit for bit on one and on two threads.
+    #[test]
+    fn colours_share_no_node_and_assembly_is_deterministic() {
+        let sleeve = include_str!("../../garments/sleeve_two_panel.ron");
+        for (name, text) in [("plate", crate::bench::scenes::CLAMPED_PLATE), ("sleeve", sleeve)] {
+            let sc = scene::parse(name, text).expect("scene");
+            let built = scene::build(&sc, name, text).expect("build");
+            let model = &built.model;
+            let asm = Assembler::new(model);
+            let mut seen = vec![0usize; model.elements.len()];
+            for colour in &asm.colours {
+                let mut nodes = HashSet::new();
+                for &e in colour {
+                    seen[e] += 1;
+                    assert!(asm.tied[e].is_empty() && asm.linked[e].is_empty(), "{name}: tied element {e} in a colour");
+                    for &n in &model.elements[e].nodes {
+                        assert!(nodes.insert(n), "{name}: node {n} twice in one colour");
+                    }
+                }
+            }
+            for &e in &asm.serial {
+                seen[e] += 1;
+            }
+            assert!(seen.iter().all(|&s| s == 1), "{name}: an element assembled twice or never");
+            if name == "sleeve" {
+                assert!(!asm.serial.is_empty(), "the sleeve's seams tie DOFs");
+            }
+            let mut state = model.initial_state();
+            let du: Vec<f64> = (0..model.dofs.n_free).map(|i| 1e-4 * ((i % 13) as f64 - 6.0)).collect();
+            model.update(&mut state, &du, 1.0);
+            let run = |threads: usize| {
+                let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("pool");
+                let mut f = vec![0.0; NODE_DOFS * model.n_nodes()];
+                let mut v = vec![0.0; asm.nnz()];
+                let info = pool.install(|| asm.assemble(model, &state, &mut f, Some(&mut v))).expect("assembly");
+                (f, v, info.energy)
+            };
+            let (one, two) = (run(1), run(2));
+            assert!(one == two, "{name}: assembly differs between one and two threads");
+            assert!(asm.n_colours() >= 2 && one.2 > 0.0);
+        }
+    }
+}
