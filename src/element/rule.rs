@@ -160,10 +160,11 @@ impl SectionRule {
         Self { forms: t.forms, levels: vec![level] }
     }
 
-    /// Whether the rule fits the element kernel's fixed-size scratch (always true for the
+    /// Whether the rule fits the element kernel's fixed-size scratch: at most [`MAX_FORMS`]
+    /// forms, and per level at most [`MAX_PAIRS`] pairs and 4 points (always true for the
     /// 1–5-point thickness rules).
     pub(super) fn fits(&self) -> bool {
-        self.forms.len() <= MAX_FORMS && self.levels.iter().all(|l| l.pairs.len() <= MAX_PAIRS)
+        self.forms.len() <= MAX_FORMS && self.levels.iter().all(|l| l.pairs.len() <= MAX_PAIRS && l.points.len() <= 4)
     }
 }
 
