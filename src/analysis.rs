@@ -50,7 +50,7 @@ pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &m
     let model = seeded.as_ref().map_or(&built.model, |s| &s.0);
     let mut solver = Solver::new(model, scene.solver.clone()).map_err(RunError::Setup)?;
     if let Some(c) = &built.contact {
-        crate::contact::attach(&mut solver, model, c);
+        crate::contact::attach(&mut solver, model, c).map_err(RunError::Setup)?;
     }
     if let Some(s) = &built.interply {
         crate::contact::interply::attach(&mut solver, model, s);

@@ -77,6 +77,10 @@ pub struct Assembler {
     /// expansions of local DOFs i and j), weighted at every assembly with the current
     /// weights instead of through `tied`. Empty for other elements.
     linked: Vec<Vec<(u16, u32, u8, u8)>>,
+    /// Replace each element's tangent by a positive semi-definite one before the scatter
+    /// (eigenvalue filtering, [`project_psd`]): a descent direction for the energy where the
+    /// assembled tangent is indefinite.
+    pub project: bool,
 }
 
 
@@ -253,7 +257,7 @@ impl Assembler {
                 Err(f) => Err(f.clone()),
             })
             .collect();
-        Self { pattern, slots, rules, geometry, tied, linked }
+        Self { pattern, slots, rules, geometry, tied, linked, project: false }
     }
 
     /// Number of stored entries of the upper triangle.
@@ -300,7 +304,9 @@ impl Assembler {
                 for i in 0..ELEMENT_DOFS {
                     f_int[NODE_DOFS * nodes[i / NODE_DOFS] + i % NODE_DOFS] += out.force[i];
                 }
-                if let (Some(v), Some(k)) = (values.as_deref_mut(), out.stiffness.as_ref()) {
+                if let (Some(v), Some(k)) = (values.as_deref_mut(), out.stiffness.as_deref()) {
+                    let projected = if self.project { Some(project_psd(k)) } else { None };
+                    let k = projected.as_ref().unwrap_or(k);
                     let slots = &self.slots[e];
                     for j in 0..ELEMENT_DOFS {
                         for i in 0..ELEMENT_DOFS {
@@ -332,4 +338,19 @@ impl Assembler {
         model.dofs.fold(f_int);
         Ok(AssemblyInfo { energy, seconds: t0.elapsed().as_secs_f64() })
     }
+}
+
+/// A positive semi-definite replacement of the symmetric element tangent `k` = V Λ Vᵀ:
+/// V |Λ| Vᵀ, the negative curvatures mirrored (Chen, Kaufman et al., *Trust-region
+/// eigenvalue filtering for projected Newton*, SIGGRAPH Asia 2024: far from a minimum the
+/// absolute value keeps the scale of the curvature, where clamping to zero, Teran et al.
+/// SCA 2005, leaves nearly singular directions and huge steps along them).
+fn project_psd(k: &crate::element::ElemMat) -> crate::element::ElemMat {
+    let sym = (k + k.transpose()) * 0.5;
+    let e = nalgebra::SymmetricEigen::new(sym);
+    if e.eigenvalues.iter().all(|&l| l >= 0.0) {
+        return sym;
+    }
+    let clamped = e.eigenvalues.map(f64::abs);
+    &e.eigenvectors * nalgebra::Matrix::from_diagonal(&clamped) * e.eigenvectors.transpose()
 }

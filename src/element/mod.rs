@@ -5,7 +5,7 @@ pub mod quadrature;
 pub mod shell4;
 
 pub use director::DirectorFrame;
-pub use shell4::{ElementFailure, ElementGeometry, ElementOutput, Section, SectionRule, ShearTreatment, ShellElement};
+pub use shell4::{ElemMat, ElementFailure, ElementGeometry, ElementOutput, Section, SectionRule, ShearTreatment, ShellElement};
 
 /// Unknowns per node: three translations and the two director tilts (α1, α2).
 pub const NODE_DOFS: usize = 5;

@@ -431,7 +431,7 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
         }
         let _ = si;
         let kind = super::path::resolve_step_kind(s, &field, &loc, &node_sets, &loads, &fixed)?;
-        steps.push(StepPlan { name: s.name.clone(), increments: s.increments, linear: s.linear, target_scales: current.clone(), kind });
+        steps.push(StepPlan { name: s.name.clone(), increments: s.increments, linear: s.linear, automatic_increments: s.automatic_increments, target_scales: current.clone(), kind });
     }
 
     // Monitors.
