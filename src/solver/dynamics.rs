@@ -60,6 +60,10 @@ use crate::model::{Model, State, FIXED, UNTIED};
 /// contact constraint limit, `contact::mechanics`).
 const MAX_SADDLE_ESCAPES: usize = 10;
 
+/// Successive time-step failures at the same element after which a Dynamic step stops with a
+/// diagnosis instead of cutting Δt further (each cut quarters it).
+const FAILURE_STREAK: usize = 6;
+
 /// Inexact time steps on the way to rest: the last Newton correction may move nodes by this
 /// fraction of the step's largest nodal motion (see `time_step`).
 const INEXACT_MOTION: f64 = 1e-3;
@@ -540,7 +544,7 @@ impl<'m> Solver<'m> {
                     self.timings.line_search_cuts += d.cuts;
                     d.energy
                 })
-                .map_err(|cause| (self.worst_element(&r), format!("energy line search failed: {cause}")))
+                .map_err(|(failing, cause)| (failing.or_else(|| self.worst_element(&r)), format!("energy line search failed: {cause}")))
             } else {
                 // Backtracking along the Newton direction keeps the time step.
                 self.safeguarded_update(state, &du, scales, true).map_err(|failure| match failure {
@@ -818,6 +822,7 @@ impl<'m> Solver<'m> {
             step: si,
             step_name: step.name.clone(),
             last_converged_time: si as f64 + (t / ds.max_time).min(0.999_999),
+            simulated_time: Some(t),
             iteration,
             residuals,
             worst_element,
@@ -880,6 +885,8 @@ impl<'m> Solver<'m> {
         let mut unstable_rests = 0usize;
         let mut saddle_escapes = 0usize;
         let mut indefinite = false;
+        // (element, successive time-step failures at it) since the last accepted step.
+        let mut failure_streak: (Option<usize>, usize) = (None, 0);
         for k in 1..=ds.max_steps {
             let scales = at(t + dt);
             let mut report_progress = |it: usize, res: f64| {
@@ -891,6 +898,7 @@ impl<'m> Solver<'m> {
             let outcome = self.time_step(state, &prev, &mass, dt, ds, &scales, &mut report_progress);
             match outcome {
                 TimeStep::Converged { iterations: its, residuals, static_residual, energy, static_r } => {
+                    failure_streak = (None, 0);
                     iterations += its;
                     self.commit_nodal_forces(state);
                     let co = Coefficients::new(&ds.scheme, dt, ds.mass_damping);
@@ -993,7 +1001,26 @@ impl<'m> Solver<'m> {
                         ));
                     }
                 }
+                TimeStep::Failed { iteration, residuals, worst_element, cause }
+                    if worst_element.is_some() && cause.contains("failed:") && failure_streak.0 == worst_element && failure_streak.1 + 1 >= FAILURE_STREAK =>
+                {
+                    // The same element failed at every one of the last time-step cuts: a
+                    // smaller Δt does not cure it (4⁻⁶ of the Δt it first failed at).
+                    let cause = format!(
+                        "time step {k} at t = {t:.4e}: element {} failed at {FAILURE_STREAK} successive time-step cuts down to Δt = {dt:.3e}: {cause}",
+                        worst_element.unwrap_or(0)
+                    );
+                    let cause = diagnose::explain_dynamic(model, &prev.state, &cause, worst_element);
+                    *state = prev.state.clone();
+                    return Err(error(iteration, residuals, worst_element, cause, t));
+                }
                 TimeStep::Indefinite { .. } | TimeStep::Failed { .. } if dt * 0.25 >= ds.dt_min => {
+                    match &outcome {
+                        TimeStep::Failed { worst_element, cause, .. } if worst_element.is_some() && cause.contains("failed:") => {
+                            failure_streak = if failure_streak.0 == *worst_element { (*worst_element, failure_streak.1 + 1) } else { (*worst_element, 1) };
+                        }
+                        _ => failure_streak = (None, 0),
+                    }
                     indefinite |= matches!(outcome, TimeStep::Indefinite { .. });
                     *state = prev.state.clone();
                     rejected += 1;
@@ -1010,7 +1037,7 @@ impl<'m> Solver<'m> {
                 }
                 TimeStep::Failed { iteration, residuals, worst_element, cause } => {
                     let cause = format!("time step {k} at t = {t:.4e}, Δt = {dt:.3e} (below 4 dt_min after cut-backs): {cause}");
-                    let cause = diagnose::explain(model, state, &cause, self.cholesky.kind() == FactorKind::Ldlt);
+                    let cause = diagnose::explain_dynamic(model, &prev.state, &cause, worst_element);
                     *state = prev.state.clone();
                     return Err(error(iteration, residuals, worst_element, cause, t));
                 }

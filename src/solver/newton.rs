@@ -141,6 +141,8 @@ pub struct SolveError {
     pub step_name: String,
     /// Pseudo-time reached by the last converged state.
     pub last_converged_time: f64,
+    /// Simulated time of the last accepted time step within a `Dynamic` step.
+    pub simulated_time: Option<f64>,
     /// Newton iteration at failure.
     pub iteration: usize,
     /// Relative residual history of the last attempt.
@@ -153,12 +155,16 @@ pub struct SolveError {
 
 impl std::fmt::Display for SolveError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let at = match self.simulated_time {
+            Some(t) => format!("simulated time t = {t:.4e}"),
+            None => format!("time {:.6}", self.last_converged_time),
+        };
         write!(
             f,
-            "step {} '{}' failed after the last converged state at time {:.6}: {} (iteration {}, residual history [{}]",
+            "step {} '{}' failed after the last converged state at {}: {} (iteration {}, residual history [{}]",
             self.step + 1,
             self.step_name,
-            self.last_converged_time,
+            at,
             self.cause,
             self.iteration,
             residual_history(&self.residuals)
@@ -490,7 +496,8 @@ impl<'m> Solver<'m> {
     /// Π(s) ≤ Π₀ + 10⁻⁴ s·slope (slope = ∇Π·du < 0), Π = [`Solver::potential`] + `extra`
     /// (the inertia potential of a time step), within a round-off allowance of 10⁻¹⁰ of the
     /// magnitudes making up Π₀. The accepted state is assembled with its tangent. On failure
-    /// `state` is restored (and reassembled) and the reason returned.
+    /// `state` is restored (and reassembled) and the reason returned, with the element whose
+    /// failure ended the search, if one did.
     #[allow(clippy::too_many_arguments)]
     pub(super) fn energy_line_search(
         &mut self,
@@ -501,7 +508,7 @@ impl<'m> Solver<'m> {
         pi0: f64,
         magnitude: f64,
         extra: &mut dyn FnMut(&Self, &State) -> f64,
-    ) -> Result<Descent, String> {
+    ) -> Result<Descent, (Option<usize>, String)> {
         let base = state.clone();
         let mut s = 1.0f64;
         if !self.nodal_forces.is_empty() {
@@ -517,6 +524,7 @@ impl<'m> Solver<'m> {
         let tol = 1e-10 * magnitude.abs().max(pi0.abs());
         let mut cuts = 0;
         let mut last = String::from("no admissible state along the Newton direction");
+        let mut failing = None;
         if s > 0.0 {
             for tries in 0..40 {
                 *state = base.clone();
@@ -528,6 +536,7 @@ impl<'m> Solver<'m> {
                         if pi.is_finite() && pi <= pi0 + 1e-4 * s * slope + tol {
                             if !tangent && let Err(f) = self.assemble(state, scales, true) {
                                 last = f.to_string();
+                                failing = Some(f.element);
                                 break;
                             }
                             return Ok(Descent { energy: e, cuts });
@@ -535,7 +544,10 @@ impl<'m> Solver<'m> {
                         last = format!("no decrease of the potential down to step {s:.2e} (Π₀ = {pi0:.6e}, slope {slope:.3e})");
                     }
                     Ok(_) => last = "forces not finite along the Newton direction".into(),
-                    Err(f) => last = f.to_string(),
+                    Err(f) => {
+                        last = f.to_string();
+                        failing = Some(f.element);
+                    }
                 }
                 s *= 0.5;
                 cuts += 1;
@@ -548,7 +560,7 @@ impl<'m> Solver<'m> {
         }
         *state = base;
         let _ = self.assemble(state, scales, true);
-        Err(last)
+        Err((failing, last))
     }
 
     /// Largest nodal tilt |(δα₁, δα₂)| of the free-DOF increment `du` (radians).
@@ -781,6 +793,7 @@ impl<'m> Solver<'m> {
                                     step: si,
                                     step_name: step.name.clone(),
                                     last_converged_time: si as f64 + tau,
+                                    simulated_time: None,
                                     iteration,
                                     residuals,
                                     worst_element,
@@ -801,7 +814,7 @@ impl<'m> Solver<'m> {
 
     /// Automatic load incrementation of a static step (Crisfield 1991, §9.5; Abaqus-style
     /// automatic increments): the first increment is 1/`increments` of the step, an increment
-    /// that converged within 6 iterations doubles the next (within 10: ×1.5; above 15: ×½),
+    /// that converged within 8 iterations doubles the next (within 12: ×1.5; above 18: ×½),
     /// and a failed one — stopped early when divergence shows ([`Solver::attempt`]) — is
     /// retried at a quarter of its size. Every converged increment is reported; the step ends
     /// exactly at its target scales. Returns the scales reached.
@@ -870,9 +883,9 @@ impl<'m> Solver<'m> {
                     cutbacks = 0;
                     indefinite = false;
                     dtau *= match its {
-                        0..=6 => 2.0,
-                        7..=10 => 1.5,
-                        11..=15 => 1.0,
+                        0..=8 => 2.0,
+                        9..=12 => 1.5,
+                        13..=18 => 1.0,
                         _ => 0.5,
                     };
                 }
@@ -887,6 +900,7 @@ impl<'m> Solver<'m> {
                             step: si,
                             step_name: step.name.clone(),
                             last_converged_time: si as f64 + tau,
+                            simulated_time: None,
                             iteration,
                             residuals,
                             worst_element,
