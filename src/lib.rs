@@ -30,3 +30,4 @@ pub mod results;
 pub mod bench;
 pub mod contact;
 pub mod garment;
+pub mod budget;

@@ -1,5 +1,6 @@
 //! Command line: `plyshell solve`, `plyshell demo`, `plyshell check`, `plyshell bench`.
 
+use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -21,6 +22,24 @@ const DEMO_NAME: &str = "garments/nbc_sleeve.ron (bundled)";
 struct Cli {
     #[command(subcommand)]
     command: Command,
+    /// Memory budget for the model, tangent and factor (e.g. 8G, 512M); default 60 % of the
+    /// available memory. Scenes estimated to need more are refused before allocating.
+    #[arg(long, global = true, value_parser = plyshell::budget::parse_size)]
+    max_memory: Option<u64>,
+}
+
+/// Prints a line to stdout; a closed pipe (`plyshell check S | head -1`) is not an error.
+macro_rules! say {
+    ($($t:tt)*) => {{
+        let _ = writeln!(std::io::stdout(), $($t)*);
+    }};
+}
+
+/// Prints a line to stderr, ignoring a closed stream.
+macro_rules! warn {
+    ($($t:tt)*) => {{
+        let _ = writeln!(std::io::stderr(), $($t)*);
+    }};
 }
 
 #[derive(Subcommand)]
@@ -61,6 +80,7 @@ enum Command {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    plyshell::budget::set_limit(cli.max_memory);
     let result = match cli.command {
         Command::Solve { scene, out, quiet } => scene::load(&scene)
             .map_err(|e| e.to_string())
@@ -75,7 +95,7 @@ fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {e}");
+            warn!("error: {e}");
             ExitCode::FAILURE
         }
     }
@@ -83,25 +103,28 @@ fn main() -> ExitCode {
 
 fn check(scene: &Scene, built: &BuiltScene) {
     let m = &built.model;
-    println!("scene '{}': {} parts, {} nodes, {} elements, {} free DOFs", scene.name, m.parts.len(), m.n_nodes(), m.elements.len(), m.dofs.n_free);
+    say!("scene '{}': {} parts, {} nodes, {} elements, {} free DOFs", scene.name, m.parts.len(), m.n_nodes(), m.elements.len(), m.dofs.n_free);
     for (name, q) in &built.quality {
-        println!(
+        say!(
             "  part {name}: angles {:.1}°..{:.1}°, max aspect {:.2}, min Jacobian ratio {:.3}",
             q.min_angle_deg, q.max_angle_deg, q.max_aspect_ratio, q.min_jacobian_ratio
         );
     }
     if !built.seams.is_empty() {
-        println!("  {} seams, {} tied DOFs", built.seams.len(), m.dofs.ties.len());
+        say!("  {} seams, {} tied DOFs", built.seams.len(), m.dofs.ties.len());
     }
     for w in &built.warnings {
-        eprintln!("{w}");
+        warn!("{w}");
     }
     for w in built.contact.iter().flat_map(|c| &c.warnings) {
-        eprintln!("warning: {w}");
+        warn!("warning: {w}");
     }
 }
 
 fn solve(scene: &Scene, built: &BuiltScene, out: &Path, quiet: bool) -> Result<(), String> {
+    if out.exists() && !out.is_dir() {
+        return Err(format!("--out {}: exists and is not a directory; name a directory for the results", out.display()));
+    }
     check(scene, built);
     let bar = if quiet { ProgressBar::hidden() } else { ProgressBar::new(1000) };
     bar.set_style(
@@ -119,7 +142,7 @@ fn solve(scene: &Scene, built: &BuiltScene, out: &Path, quiet: bool) -> Result<(
     bar.finish_and_clear();
     match result {
         Ok(s) => {
-            println!(
+            say!(
                 "solved in {:.2} s ({} increments, {} Newton iterations; assembly {:.2} s, factorization {:.2} s, solve {:.2} s)",
                 s.wall_s,
                 s.increments.len(),
@@ -131,17 +154,16 @@ fn solve(scene: &Scene, built: &BuiltScene, out: &Path, quiet: bool) -> Result<(
             for h in &s.monitors {
                 if let Some(last) = h.values.last() {
                     let vals: Vec<String> = h.quantities.iter().zip(last).map(|(q, v)| format!("{q} = {v:.6e}")).collect();
-                    println!("  {} (node {}): {}", h.name, h.node, vals.join(", "));
+                    say!("  {} (node {}): {}", h.name, h.node, vals.join(", "));
                 }
             }
-            println!("results in {}: {}", out.display(), s.files.join(", "));
+            say!("results in {}: {}", out.display(), s.files.join(", "));
             Ok(())
         }
-        Err(RunError::Solve { error, summary }) => Err(format!(
-            "{error}\nthe last converged state and summary.json are in {} ({})",
-            out.display(),
-            summary.files.join(", ")
-        )),
+        Err(RunError::Solve { error, summary }) => {
+            let last = summary.files.iter().find(|f| f.ends_with("_last_converged.vtu")).map_or("(not written)", String::as_str);
+            Err(format!("{error}\nthe last converged state is {}; summary.json and the time series ({} files) are in {}", out.join(last).display(), summary.files.len(), out.display()))
+        }
         Err(e) => Err(e.to_string()),
     }
 }

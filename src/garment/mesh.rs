@@ -57,6 +57,10 @@ fn convex_quad(o: &[[f64; 2]]) -> bool {
 /// the core grid along `grain` (pattern coordinates). `segments[i]`, where given, asks for
 /// that many element edges along outline segment i (rounded up to even for the triangle
 /// split; ignored by the mapped grid), so that a seam partner's node row can be matched.
+///
+/// Errors before any work when a coordinate is not finite or beyond
+/// [`super::graph::MAX_COORDINATE`], or when the mesh would have more than
+/// [`MAX_PATTERN_NODES`] nodes ([`estimate_nodes`]) or a requested segment count is absurd.
 pub fn mesh_polygon(outline: &[[f64; 2]], h: f64, segments: &[Option<usize>], grain: [f64; 2]) -> Result<PatternMesh, String> {
     if !(h.is_finite() && h > 0.0) {
         return Err("the element size must be positive".into());
@@ -65,12 +69,52 @@ pub fn mesh_polygon(outline: &[[f64; 2]], h: f64, segments: &[Option<usize>], gr
     if !(g.is_finite() && g > 0.0) {
         return Err("the grain direction must be non-zero".into());
     }
+    if outline.len() < 3 {
+        return Err("the outline needs at least 3 vertices".into());
+    }
+    let max = super::graph::MAX_COORDINATE;
+    if let Some(v) = outline.iter().position(|v| !(v[0].abs() <= max && v[1].abs() <= max)) {
+        return Err(format!("outline vertex {v} ({:e}, {:e}) is not finite or lies beyond ±{max:e} m", outline[v][0], outline[v][1]));
+    }
+    let est = estimate_nodes(outline, h);
+    if !(est <= MAX_PATTERN_NODES as f64) {
+        return Err(format!("the element size {h} is too small for this panel: about {est:.2e} nodes (limit {MAX_PATTERN_NODES})"));
+    }
+    let requested: usize = segments.iter().flatten().fold(0usize, |a, &b| a.saturating_add(b));
+    if requested > MAX_PATTERN_NODES {
+        return Err(format!("{requested} element edges requested along the outline (limit {MAX_PATTERN_NODES})"));
+    }
     if convex_quad(outline) {
         Ok(mapped(outline, h))
     } else {
         let core = GrainCore::fit(outline, 2.0 * h, [grain[0] / g, grain[1] / g]);
         cdt_split(outline, h, segments, &core)
     }
+}
+
+/// Most nodes one pattern piece's mesh may have.
+pub const MAX_PATTERN_NODES: usize = 2_000_000;
+
+/// An upper estimate of the node count of [`mesh_polygon`] at element size `h`: about two
+/// nodes per h² of the bounding box (the triangle split of the band puts ~1.7 per h², the
+/// grain core 1) and four per h of perimeter. Infinite or NaN for absurd input, which the
+/// callers reject.
+pub fn estimate_nodes(outline: &[[f64; 2]], h: f64) -> f64 {
+    let n = outline.len();
+    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+    let mut perimeter = 0.0;
+    for i in 0..n {
+        let p = outline[i];
+        for k in 0..2 {
+            lo[k] = lo[k].min(p[k]);
+            hi[k] = hi[k].max(p[k]);
+        }
+        perimeter += dist(p, outline[(i + 1) % n]);
+    }
+    let (w, t) = (hi[0] - lo[0], hi[1] - lo[1]);
+    // The grain core's grid is laid along the grain, over at most the box's diagonal square.
+    let d = w.hypot(t);
+    2.0 * (d / h) * (d / h) + 4.0 * perimeter / h + 4.0
 }
 
 /// Square cells of a grid of spacing `size` along the grain that fit inside an outline with a
@@ -164,7 +208,7 @@ impl GrainCore {
 }
 
 /// Whether `p` lies inside the simple polygon `o` (even–odd ray crossing).
-fn point_in_polygon(p: [f64; 2], o: &[[f64; 2]]) -> bool {
+pub(crate) fn point_in_polygon(p: [f64; 2], o: &[[f64; 2]]) -> bool {
     let n = o.len();
     let mut inside = false;
     for k in 0..n {
@@ -177,7 +221,7 @@ fn point_in_polygon(p: [f64; 2], o: &[[f64; 2]]) -> bool {
 }
 
 /// Distance from point `p` to segment ab.
-fn point_segment_distance(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
+pub(crate) fn point_segment_distance(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
     let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
     let l2 = dx * dx + dy * dy;
     let t = if l2 > 0.0 { (((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / l2).clamp(0.0, 1.0) } else { 0.0 };

@@ -64,6 +64,7 @@ fn positive(x: f64) -> bool {
 /// Builds the model of `scene`, whose text `text` came from `file` (for error positions;
 /// OBJ paths are relative to the file's directory).
 pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneError> {
+    let text = super::strip_bom(text);
     let loc = Locator::new(file, text);
     let base_dir = Path::new(file).parent().unwrap_or(Path::new("."));
 
@@ -113,6 +114,8 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
     let mut parts = Vec::new();
     let mut meshes: Vec<ShellMesh> = Vec::new();
     let mut quality = Vec::new();
+    // Nodes and elements planned so far, for the memory budget.
+    let mut planned: (u64, u64) = (0, 0);
     for (pi, p) in scene.parts.iter().enumerate() {
         let field = format!("parts[{}]", p.name);
         if scene.parts[..pi].iter().any(|q| q.name == p.name) {
@@ -150,6 +153,20 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
         }
         // Materials with a through-thickness law (fabric) fix their own rule.
         let thickness_points = material.thickness_points().unwrap_or(p.thickness_points);
+        // The resource budget, before the mesh is allocated: this part and those before it.
+        let (counts, keys) = mesh_counts(&p.mesh);
+        let fits = counts
+            .and_then(|(n, e)| Some((planned.0.checked_add(n)?, planned.1.checked_add(e)?)))
+            .ok_or_else(|| "more nodes than can be numbered".to_string())
+            .and_then(|(n, e)| crate::budget::check_model(n, e).map(|_| (n, e)));
+        planned = fits.map_err(|msg| loc.at(Some(&p.name), Some("mesh"), format!("{field}.mesh"), format!("{keys}: {msg}")))?;
+        for (key, v) in [("offset", p.offset), ("grain", p.grain)] {
+            if let Some(v) = v
+                && v.iter().any(|x| !x.is_finite())
+            {
+                return Err(loc.at(Some(&p.name), Some(key), format!("{field}.{key}"), format!("expected finite numbers, found {v:?}")));
+            }
+        }
         let mut m = make_mesh(&p.mesh, base_dir).map_err(|e| loc.at(Some(&p.name), Some("mesh"), format!("{field}.mesh"), e.to_string()))?;
         if let Some(o) = p.offset {
             m.nodes.iter_mut().for_each(|x| *x += v3(o));
@@ -180,7 +197,34 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
     // Garment plies as further parts.
     let material_names: std::collections::BTreeSet<String> = materials.keys().map(|k| k.to_string()).collect();
     let garment = match &scene.garment {
-        Some(g) => Some((g, crate::garment::GarmentMesh::build(g, &loc, &material_names)?)),
+        Some(g) => {
+            // A ply of a fabric with its own thickness must have that thickness (as a part must).
+            for (name, ply) in &g.plies {
+                if let Some(t) = materials.get(ply.material.as_str()).and_then(|m| m.intrinsic_thickness())
+                    && (ply.thickness - t).abs() > 1e-9 * t
+                {
+                    return Err(loc.at(Some(name), Some("thickness"), format!("garment.plies[{name}].thickness"), format!(
+                        "ply \"{name}\": material \"{}\" is a sheet of thickness {t} (its stiffness and bending rigidity are for that thickness); the ply's thickness must equal it, found {}",
+                        ply.material, ply.thickness
+                    )));
+                }
+            }
+            // The budget before meshing: an upper estimate of each panel's nodes, times its plies.
+            let (mut n, mut e) = planned;
+            for p in &g.panels {
+                if p.outline.iter().flatten().any(|v| !(v.abs() <= crate::garment::graph::MAX_COORDINATE)) {
+                    continue; // the garment's validation names the vertex
+                }
+                let est = crate::garment::mesh::estimate_nodes(&p.outline, g.element_size) * p.plies.len().max(1) as f64;
+                let fits = if est < 1e15 { n.checked_add(est as u64).zip(e.checked_add(est as u64)) } else { None };
+                let msg = match fits {
+                    Some((n2, e2)) => crate::budget::check_model(n2, e2).map(|_| (n2, e2)),
+                    None => Err(format!("about {est:.2e} nodes, beyond any memory")),
+                };
+                (n, e) = msg.map_err(|m| loc.at(None, Some("element_size"), "garment.element_size", format!("panel \"{}\" at this element size: {m}", p.name)))?;
+            }
+            Some((g, crate::garment::GarmentMesh::build(g, &loc, &material_names)?))
+        }
         None => None,
     };
     let mut garment_first_node = Vec::new();
@@ -208,6 +252,8 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
         }
     }
     let n_nodes = x0.len();
+    // The exact sizes (OBJ meshes and focused rings are known only now).
+    crate::budget::check_model(n_nodes as u64, elements.len() as u64).map_err(|m| loc.at(None, Some("parts"), "parts", m))?;
     let part_index = |name: &str| parts.iter().position(|p: &PartInfo| p.name == name);
 
     // Node sets.
@@ -227,6 +273,15 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
                 None => Ok((0..meshes.len()).collect()),
             }
         };
+        let numbers: Vec<(&str, Vec<f64>)> = match sel {
+            Selector::Box { min, max, .. } => vec![("min", min.to_vec()), ("max", max.to_vec())],
+            Selector::Plane { point, normal, tol, .. } => vec![("point", point.to_vec()), ("normal", normal.to_vec()), ("tol", vec![*tol])],
+            Selector::Nearest { point, .. } => vec![("point", point.to_vec())],
+            Selector::Edge { .. } | Selector::Part { .. } => Vec::new(),
+        };
+        if let Some((key, v)) = numbers.iter().find(|(_, v)| v.iter().any(|x| !x.is_finite())) {
+            return Err(loc.at(Some(name), Some(key), format!("{field}.{key}"), format!("expected finite numbers, found {v:?}")));
+        }
         let mut nodes = Vec::new();
         match sel {
             Selector::Box { min, max, part } => {
@@ -349,6 +404,19 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
                 loc.at_value(name, part, format!("{field}.part"), format!("unknown part \"{part}\"; parts: {}", known.join(", ")))
             })
         };
+        let numbers: (&str, Vec<f64>) = match spec {
+            LoadSpec::NodalForce { force: v, .. } | LoadSpec::TotalForce { force: v, .. } => ("force", v.to_vec()),
+            LoadSpec::NodalMoment { moment: v, .. } => ("moment", v.to_vec()),
+            LoadSpec::EdgeMoment { moment_per_length: v, .. } => ("moment_per_length", v.to_vec()),
+            LoadSpec::EdgeForce { force_per_length: v, .. } => ("force_per_length", v.to_vec()),
+            LoadSpec::SurfaceTraction { traction: v, .. } => ("traction", v.to_vec()),
+            LoadSpec::Gravity { g: v, .. } | LoadSpec::SelfWeight { g: v, .. } => ("g", v.to_vec()),
+            LoadSpec::Displacement { value, .. } => ("value", vec![*value]),
+            LoadSpec::Closure => ("", Vec::new()),
+        };
+        if numbers.1.iter().any(|v| !v.is_finite()) {
+            return Err(loc.at(Some(name), Some(numbers.0), format!("{field}.{}", numbers.0), format!("expected finite numbers, found {:?}", numbers.1)));
+        }
         let kind = match spec {
             LoadSpec::NodalForce { set, force } => LoadKind::Forces(set_of(set)?.iter().map(|&n| (n, v3(*force))).collect()),
             LoadSpec::TotalForce { set, force } => {
@@ -437,6 +505,12 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
     // Monitors.
     let mut monitors = Vec::new();
     for m in &scene.monitors {
+        if m.point.iter().any(|x| !x.is_finite()) {
+            return Err(loc.at(Some(&m.name), Some("point"), format!("monitors[{}].point", m.name), format!("expected finite numbers, found {:?}", m.point)));
+        }
+        if m.dofs.is_empty() {
+            return Err(loc.at(Some(&m.name), Some("dofs"), format!("monitors[{}].dofs", m.name), "expected at least one quantity to record (Ux, Uy, Uz or Umag)"));
+        }
         let candidates: Vec<usize> = match (&m.part, &m.set) {
             (_, Some(set)) => get_set(set, &m.name, format!("monitors[{}].set", m.name))?.clone(),
             (Some(pn), None) => {
@@ -465,6 +539,17 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
         if !ok(d.disc_radius) || !ok(d.specimen_radius) || d.disc_radius >= d.specimen_radius || d.resolution.is_some_and(|r| !ok(r)) {
             return Err(loc.at(None, Some("drape"), "drape", "expected 0 < disc_radius < specimen_radius and a positive resolution"));
         }
+        if d.center.iter().any(|x| !x.is_finite()) {
+            return Err(loc.at(None, Some("center"), "drape.center", format!("expected finite numbers, found {:?}", d.center)));
+        }
+        // The specimen must be the mesh: its outermost node at specimen_radius from the centre.
+        let outer = x0.iter().map(|x| (x.x - d.center[0]).hypot(x.y - d.center[1])).fold(0.0, f64::max);
+        if (outer - d.specimen_radius).abs() > 0.01 * d.specimen_radius {
+            return Err(loc.at(None, Some("specimen_radius"), "drape.specimen_radius", format!(
+                "the specimen radius is {} but the mesh's outermost node lies {outer:.6} from the drape centre",
+                d.specimen_radius
+            )));
+        }
     }
     let imperfection = scene.imperfection.as_ref().map(|imp| super::path::resolve_imperfection(imp, &loc, &loads)).transpose()?;
     let (mut ties, mut seams) = crate::garment::build_scene_seams(&scene.seams, &loc, &node_sets, &loads, &x0, &mut frames0)?;
@@ -479,8 +564,13 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
             .parts
             .iter()
             .zip(&garment_first_node)
-            .map(|(p, &f)| fixed[NODE_DOFS * f..NODE_DOFS * (f + p.mesh.nodes.len())].iter().any(|&x| x))
+            .map(|(p, &f)| {
+                // Carried by a support, or by contact with the rigid bodies.
+                let on_bodies = scene.contact.as_ref().is_some_and(|c| !c.bodies.is_empty() && (c.parts.is_empty() || c.parts.contains(&p.name)));
+                on_bodies || fixed[NODE_DOFS * f..NODE_DOFS * (f + p.mesh.nodes.len())].iter().any(|&x| x)
+            })
             .collect();
+        warnings.extend(gm.crossed_seams(g, &loc).into_iter().map(|e| e.to_string()));
         warnings.extend(gm.unsupported(g, &loc, &supported).into_iter().map(|e| e.to_string()));
     }
     let interply = match &garment {
@@ -501,6 +591,28 @@ fn check_young_poisson(young: f64, poisson: f64, bad: &dyn Fn(&str, &str) -> Sce
         return Err(bad("poisson", "expected a Poisson ratio in (-1, 0.5)"));
     }
     Ok(())
+}
+
+/// Nodes and elements a generated mesh will have (None on overflow), and the fields that set
+/// them. OBJ meshes count as nothing here (their size is bounded by the file's) and a focused
+/// annulus by its two bounding rings (the ring march bounds itself).
+fn mesh_counts(spec: &MeshSpec) -> (Option<(u64, u64)>, &'static str) {
+    let grid = |a: usize, b: usize, periodic: bool| {
+        let (a, b) = (a as u64, b as u64);
+        let cols = if periodic { Some(b) } else { b.checked_add(1) };
+        Some((a.checked_add(1)?.checked_mul(cols?)?, a.checked_mul(b)?))
+    };
+    match *spec {
+        MeshSpec::Rectangle { nx, ny, .. } => (grid(nx, ny, false), "nx × ny"),
+        MeshSpec::CylindricalPanel { n_axial, n_circ, .. } => (grid(n_axial, n_circ, false), "n_axial × n_circ"),
+        MeshSpec::Hemisphere { n_merid, n_circ, .. } => (grid(n_merid, n_circ, false), "n_merid × n_circ"),
+        MeshSpec::SlitAnnulus { nr, ntheta, .. } => (grid(nr, ntheta, false), "nr × ntheta"),
+        MeshSpec::TwistedStrip { nx, ny, .. } => (grid(nx, ny, false), "nx × ny"),
+        MeshSpec::Annulus { nr, ntheta, .. } => (grid(nr, ntheta, true), "nr × ntheta"),
+        MeshSpec::AnnulusRings { ref radii, ntheta } => (grid(radii.len().saturating_sub(1), ntheta, true), "radii × ntheta"),
+        MeshSpec::FocusedAnnulus { ntheta, .. } => (grid(1, ntheta, true), "ntheta"),
+        MeshSpec::Obj { .. } => (Some((0, 0)), "the OBJ file"),
+    }
 }
 
 fn make_mesh(spec: &MeshSpec, base_dir: &Path) -> Result<ShellMesh, mesh::MeshError> {
