@@ -31,3 +31,4 @@ pub mod bench;
 pub mod contact;
 pub mod garment;
 pub mod budget;
+pub mod fuzz;

@@ -67,6 +67,35 @@ enum Command {
         /// Scene file (RON).
         scene: PathBuf,
     },
+    /// Mutational fuzzing of the scene files (developer tool): mutants of every .ron under
+    /// CORPUS run through `check` (and a sample through `solve`) in capped subprocesses.
+    #[command(hide = true)]
+    Fuzz {
+        /// Directory of scene files to mutate.
+        #[arg(long, default_value = "garments")]
+        corpus: PathBuf,
+        /// Seed of the first mutant.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Number of check mutants.
+        #[arg(long, default_value_t = 2000)]
+        count: usize,
+        /// Solve every N-th mutant of a small scene (0: never).
+        #[arg(long, default_value_t = 50)]
+        solve_every: usize,
+        /// Parallel subprocesses.
+        #[arg(long, default_value_t = 2)]
+        jobs: usize,
+        /// Scratch directory (failing mutants are kept in its failures/).
+        #[arg(long, default_value = "target/fuzz-work")]
+        work: PathBuf,
+        /// Seconds before a check counts as a hang.
+        #[arg(long, default_value_t = 10.0)]
+        check_timeout: f64,
+        /// Seconds a sampled solve may run.
+        #[arg(long, default_value_t = 20.0)]
+        solve_timeout: f64,
+    },
     /// Run the verification benchmarks at several mesh sizes: table, JSON and error-vs-time plot.
     Bench {
         /// Write the records as JSON here (the plot goes beside it as .svg).
@@ -91,6 +120,9 @@ fn main() -> ExitCode {
             .and_then(|(s, b)| solve(&s, &b, &out, false)),
         Command::Check { scene } => scene::load(&scene).map_err(|e| e.to_string()).map(|(s, b)| check(&s, &b)),
         Command::Bench { json, quick } => bench::run_all(&json, quick).map_err(|e| e.to_string()),
+        Command::Fuzz { corpus, seed, count, solve_every, jobs, work, check_timeout, solve_timeout } => {
+            fuzz(corpus, seed, count, solve_every, jobs, work, check_timeout, solve_timeout)
+        }
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -99,6 +131,33 @@ fn main() -> ExitCode {
             ExitCode::FAILURE
         }
     }
+}
+
+#[allow(clippy::too_many_arguments)]
+fn fuzz(corpus: PathBuf, seed: u64, count: usize, solve_every: usize, jobs: usize, work: PathBuf, check_timeout: f64, solve_timeout: f64) -> Result<(), String> {
+    use plyshell::fuzz::{self, FuzzConfig};
+    let exe = std::env::current_exe().map_err(|e| e.to_string())?;
+    let secs = |s: f64| std::time::Duration::from_secs_f64(if s.is_finite() && s > 0.0 { s.min(86_400.0) } else { 10.0 });
+    let cfg = FuzzConfig {
+        exe,
+        corpus: fuzz::corpus(&corpus),
+        seed,
+        count,
+        solve_every,
+        solve_scenes: fuzz::SOLVE_SCENES.iter().map(|s| s.to_string()).collect(),
+        check_timeout: secs(check_timeout),
+        solve_timeout: secs(solve_timeout),
+        memory_cap: 4 << 30,
+        budget: 1 << 30,
+        jobs,
+        work,
+    };
+    if cfg.corpus.is_empty() {
+        return Err(format!("no .ron files under {}", corpus.display()));
+    }
+    let report = fuzz::run(&cfg).map_err(|e| e.to_string())?;
+    say!("{report}");
+    if report.failures.is_empty() { Ok(()) } else { Err(format!("{} failing mutants", report.failures.len())) }
 }
 
 fn check(scene: &Scene, built: &BuiltScene) {

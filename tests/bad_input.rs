@@ -367,3 +367,15 @@ fn a_garment_resting_on_contact_bodies_is_not_called_unsupported() {
     let b = scene::build(&scene::parse("g.ron", &text).expect("parse"), "g.ron", &text).expect("build");
     assert!(b.warnings.iter().all(|w| !w.contains("neither supported")), "{:?}", b.warnings);
 }
+
+/// Found by the fuzzer: a syntax error after a key preceded by a multi-byte character (a
+/// comment's "é") made the field lookup slice inside the character.
+#[test]
+fn field_lookup_after_multibyte_text_does_not_panic() {
+    let text = GOOD.replace("    parts: [", "    // métal\n    parts: [").replace("material: \"steel\",", "material: \"steel\" thickness_x,");
+    let e = error_of(&text);
+    assert!(e.line > 0 && e.column > 0, "{e}");
+    let text = GOOD.replace("increments: 1", "increments: ééééééééééééééééééééééééééééééééééééééééééééé");
+    let e = error_of(&text);
+    assert!(e.line > 0, "{e}");
+}

@@ -57,10 +57,18 @@ impl<'a> Locator<'a> {
         (line, col)
     }
 
-    /// Byte offset of the first `"name"` at or after `from`.
+    /// Byte offset of the first `"name"` at or after `from`, with the name as written
+    /// verbatim or with its quotes, backslashes and control characters escaped.
     fn find_quoted(&self, name: &str, from: usize) -> Option<usize> {
-        let needle = format!("\"{name}\"");
-        self.text.get(from..)?.find(&needle).map(|p| p + from)
+        let rest = self.text.get(from..)?;
+        let plain = name.chars().all(|c| !(c.is_control() || c == '"' || c == '\\'));
+        let mut forms = vec![name.to_string()];
+        if !plain {
+            forms.push(name.escape_debug().to_string());
+            forms.push(name.escape_default().to_string());
+            forms.push(name.chars().map(|c| if c.is_control() { format!("\\x{:02x}", c as u32) } else { c.escape_debug().to_string() }).collect());
+        }
+        forms.iter().filter_map(|f| rest.find(&format!("\"{f}\""))).min().map(|p| p + from)
     }
 
     /// Byte offset of the first `key:` (as a whole word) at or after `from`.
@@ -151,7 +159,7 @@ impl<'a> Locator<'a> {
                     let key = if let Some(q) = before.strip_suffix('"') {
                         q.rfind('"').map(|p| format!("[{}]", &q[p + 1..]))
                     } else {
-                        let start = before.rfind(|c: char| !(c.is_alphanumeric() || c == '_')).map_or(0, |p| p + 1);
+                        let start = before.char_indices().rev().find(|&(_, c)| !(c.is_alphanumeric() || c == '_')).map_or(0, |(p, c)| p + c.len_utf8());
                         (start < before.len()).then(|| before[start..].to_string())
                     };
                     if let Some(k) = key {
@@ -170,7 +178,8 @@ impl<'a> Locator<'a> {
     fn token_at(&self, offset: usize) -> &str {
         let rest = self.text.get(offset..).unwrap_or("").trim_start();
         let end = rest.find(|c: char| matches!(c, ',' | ')' | ']' | '}' | '\n') || c.is_whitespace()).unwrap_or(rest.len());
-        &rest[..end.min(40)]
+        let end = rest.char_indices().nth(40).map_or(end, |(p, _)| end.min(p));
+        &rest[..end]
     }
 
     /// Start of the value whose key ends before byte `offset` on the same line, if any.
