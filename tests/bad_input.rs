@@ -379,3 +379,33 @@ fn field_lookup_after_multibyte_text_does_not_panic() {
     let e = error_of(&text);
     assert!(e.line > 0, "{e}");
 }
+
+/// `check` rejects what `solve` would reject only on reaching it.
+#[test]
+fn check_rejects_what_the_solve_would_refuse_later() {
+    // A buckling step that changes no load.
+    let text = GOOD.replace(
+        "steps: [(name: \"load\", increments: 1, scale: {\"pull\": 1.0})]",
+        "steps: [(name: \"load\", increments: 1, scale: {\"pull\": 1.0}), (name: \"modes\", increments: 1, kind: Buckling(modes: 2))]",
+    );
+    let e = error_of(&text);
+    assert_eq!(e.field, "steps[modes].scale", "{e}");
+    assert!(e.message.contains("changes no load"), "{e}");
+    // A plot against a pattern that does not exist, or that no step scales.
+    let text = GOOD.replace("    steps:", "    output: (plot_against: Some(\"push\")),\n    steps:");
+    let e = error_of(&text);
+    assert!(e.field == "output.plot_against" && e.message.contains("no load named \"push\""), "{e}");
+    assert_eq!(e.line, line_of(&text, "plot_against"));
+    let text = GOOD
+        .replace("\"pull\": TotalForce", "\"idle\": TotalForce(set: \"tip\", force: (0.0, 1.0, 0.0)), \"pull\": TotalForce")
+        .replace("    steps:", "    output: (plot_against: Some(\"idle\")),\n    steps:");
+    let e = error_of(&text);
+    assert!(e.field == "output.plot_against" && e.message.contains("no step scales"), "{e}");
+    // Nothing free to solve for.
+    let text = GOOD.replace("boundary: [Clamp(set: \"root\")]", "node_sets_all: (),\n    boundary: [Clamp(set: \"root\"), Clamp(set: \"all\")]").replace("node_sets_all: (),\n    ", "").replace(
+        "\"tip\": Edge(part: \"strip\", edge: \"xmax\")}",
+        "\"tip\": Edge(part: \"strip\", edge: \"xmax\"), \"all\": Part(part: \"strip\")}",
+    );
+    let e = error_of(&text);
+    assert!(e.field == "boundary" && e.message.contains("nothing to solve"), "{e}");
+}

@@ -487,6 +487,7 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
                 return Err(loc.at(Some(&s.name), Some(key), format!("{field}.kind.{key}"), msg));
             }
         }
+        let previous = current.clone();
         for (lname, &v) in &s.scale {
             let Some(i) = loads.iter().position(|l| &l.name == lname) else {
                 let known: Vec<&str> = loads.iter().map(|l| l.name.as_str()).collect();
@@ -499,6 +500,11 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
         }
         let _ = si;
         let kind = super::path::resolve_step_kind(s, &field, &loc, &node_sets, &loads, &fixed)?;
+        // What the solver would refuse only when it reaches the step: a buckling or
+        // arc-length step without a load change.
+        if matches!(kind, crate::solver::StepKind::Buckling { .. } | crate::solver::StepKind::ArcLength { .. }) && current == previous {
+            return Err(loc.at(Some(&s.name), Some("scale"), format!("{field}.scale"), "the step changes no load: give the reference load's target scale in its scale table"));
+        }
         steps.push(StepPlan { name: s.name.clone(), increments: s.increments, linear: s.linear, target_scales: current.clone(), kind });
     }
 
@@ -579,6 +585,28 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
     };
     crate::garment::apply_tapes(&seams, &x0, &mut elements, &mut sections);
     let dofs = DofMap::with_ties(&fixed, ties).map_err(|e| loc.at(None, Some("seams"), "seams", e))?;
+    if dofs.n_free == 0 {
+        return Err(loc.at(None, Some("boundary"), "boundary", "every DOF is supported, prescribed or tied: there is nothing to solve"));
+    }
+    for s in &steps {
+        if let crate::solver::StepKind::DisplacementControl { global_dof, set, .. } = &s.kind
+            && dofs.eq.get(*global_dof).is_none_or(|&e| e == crate::model::FIXED)
+        {
+            return Err(loc.at_value(&s.name, set, format!("steps[{}].kind.set", s.name), "the controlled DOF is tied by a seam or stitch line (it has no equation of its own); control a master node"));
+        }
+    }
+    if let Some(pname) = &scene.output.plot_against {
+        match loads.iter().position(|l| &l.name == pname) {
+            None => {
+                let known: Vec<&str> = loads.iter().map(|l| l.name.as_str()).collect();
+                return Err(loc.at(None, Some("plot_against"), "output.plot_against", format!("no load named \"{pname}\"; loads: {}", known.join(", "))));
+            }
+            Some(i) if steps.iter().all(|s| s.target_scales[i] == 0.0) => {
+                return Err(loc.at(None, Some("plot_against"), "output.plot_against", format!("no step scales the load \"{pname}\": the monitor plot would have no x range")));
+            }
+            Some(_) => {}
+        }
+    }
     let model = Model { x0, frames0, elements, sections, parts, dofs, loads };
     Ok(BuiltScene { model, steps, monitors, node_sets, quality, imperfection, seams, warnings, garment: layout, contact, interply })
 }
