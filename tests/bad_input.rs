@@ -409,3 +409,26 @@ fn check_rejects_what_the_solve_would_refuse_later() {
     let e = error_of(&text);
     assert!(e.field == "boundary" && e.message.contains("nothing to solve"), "{e}");
 }
+
+/// Loop bounds and thread counts from the file are bounded before the solve.
+#[test]
+fn solver_controls_and_step_counts_are_bounded() {
+    for (repl, field) in [
+        ("solver: (threads: 4294967297),", "solver.threads"),
+        ("solver: (max_cutbacks: 18446744073709551615),", "solver.max_cutbacks"),
+        ("solver: (max_iterations: 0),", "solver.max_iterations"),
+        ("solver: (residual_tol: NaN),", "solver.residual_tol"),
+        ("solver: (energy_tol: -1.0),", "solver.energy_tol"),
+    ] {
+        let text = GOOD.replace("    steps:", &format!("    {repl}\n    steps:"));
+        let e = error_of(&text);
+        assert_eq!(e.field, field, "{repl}: {e}");
+        assert_eq!(e.line, line_of(&text, "solver:"), "{e}");
+    }
+    let text = GOOD.replace("increments: 1", "increments: 4294967297");
+    let e = error_of(&text);
+    assert_eq!(e.field, "steps[load].increments", "{e}");
+    let text = GOOD.replace("scale: {\"pull\": 1.0})", "scale: {\"pull\": 1.0}, kind: Buckling(modes: 4294967297))");
+    let e = error_of(&text);
+    assert_eq!(e.field, "steps[load].kind.modes", "{e}");
+}
