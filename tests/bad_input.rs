@@ -432,3 +432,12 @@ fn solver_controls_and_step_counts_are_bounded() {
     let e = error_of(&text);
     assert_eq!(e.field, "steps[load].kind.modes", "{e}");
 }
+
+/// Found by the fuzzer: a reference written with a `\u{..}` escape was not located.
+#[test]
+fn a_reference_written_with_a_unicode_escape_is_located() {
+    let text = GOOD.replace("material: \"steel\"", "material: \"st\\u{1e6}el\"");
+    let e = error_of(&text);
+    assert_eq!(e.field, "parts[strip].material", "{e}");
+    assert_eq!(e.line, line_of(&text, "st\\u{1e6}el"), "{e}");
+}

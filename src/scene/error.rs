@@ -61,12 +61,13 @@ impl<'a> Locator<'a> {
     /// verbatim or with its quotes, backslashes and control characters escaped.
     fn find_quoted(&self, name: &str, from: usize) -> Option<usize> {
         let rest = self.text.get(from..)?;
-        let plain = name.chars().all(|c| !(c.is_control() || c == '"' || c == '\\'));
+        let plain = name.chars().all(|c| !(c.is_control() || c == '"' || c == '\\' || !c.is_ascii()));
         let mut forms = vec![name.to_string()];
         if !plain {
             forms.push(name.escape_debug().to_string());
             forms.push(name.escape_default().to_string());
             forms.push(name.chars().map(|c| if c.is_control() { format!("\\x{:02x}", c as u32) } else { c.escape_debug().to_string() }).collect());
+            forms.push(name.chars().map(|c| if c.is_ascii() && !c.is_control() { c.escape_debug().to_string() } else { c.escape_unicode().to_string() }).collect());
         }
         forms.iter().filter_map(|f| rest.find(&format!("\"{f}\""))).min().map(|p| p + from)
     }
