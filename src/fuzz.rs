@@ -338,6 +338,9 @@ fn run_capped(cfg: &FuzzConfig, dir: &Path, args: &[&str], timeout: Duration, so
     cmd.arg("-c").arg(format!("ulimit -v {kb} && exec \"$0\" \"$@\"")).arg(&cfg.exe).args(args);
     cmd.arg("--max-memory").arg(cfg.budget.to_string());
     cmd.current_dir(dir).stdin(Stdio::null()).stdout(Stdio::null()).stderr(Stdio::piped()).env("RUST_BACKTRACE", "0");
+    // Few threads and malloc arenas, so the address-space cap measures the model, not the
+    // machine's core count (64 threads × 64 MiB arenas would approach 4 GiB by themselves).
+    cmd.env("RAYON_NUM_THREADS", "2").env("MALLOC_ARENA_MAX", "2");
     let mut child = match cmd.spawn() {
         Ok(c) => c,
         Err(e) => return (Outcome::Abort, format!("cannot start: {e}")),
