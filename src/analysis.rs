@@ -48,9 +48,11 @@ pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &m
         None => None,
     };
     let model = seeded.as_ref().map_or(&built.model, |s| &s.0);
-    let mut solver = Solver::new(model, scene.solver.clone()).map_err(RunError::Setup)?;
+    let mut solver = Solver::new(model, scene.solver.clone()).map_err(|e| {
+        RunError::Setup(format!("{e}; the model has {} nodes, {} elements and {} free DOFs (set by the parts' mesh counts and the garment's element_size)", model.n_nodes(), model.elements.len(), model.dofs.n_free))
+    })?;
     if let Some(c) = &built.contact {
-        crate::contact::attach(&mut solver, model, c);
+        crate::contact::attach(&mut solver, model, c).map_err(RunError::Setup)?;
     }
     if let Some(s) = &built.interply {
         crate::contact::interply::attach(&mut solver, model, s);
@@ -65,7 +67,10 @@ pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &m
         ..Default::default()
     };
     if let Some(dir) = &options.out_dir {
-        std::fs::create_dir_all(dir).map_err(|e| RunError::Io(format!("{}: {e}", dir.display())))?;
+        if dir.exists() && !dir.is_dir() {
+            return Err(RunError::Io(format!("{}: exists and is not a directory (the output directory must be a directory)", dir.display())));
+        }
+        std::fs::create_dir_all(dir).map_err(|e| RunError::Io(format!("cannot create the output directory {}: {e}", dir.display())))?;
     }
     let export = ExportOptions { binary: scene.output.binary, ..Default::default() };
     let mut pvd_entries: Vec<(f64, String)> = Vec::new();
@@ -122,16 +127,22 @@ pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &m
         progress,
     );
     summary.timings = solver.timings.clone();
+    // Output problems after the solve: reported, but never a reason to skip summary.json.
+    let mut problems: Vec<String> = io_error.into_iter().collect();
     if let Some(c) = &built.contact {
-        crate::contact::summarize(scene, c, model, &state, solver.nodal_forces(), &mut summary.extra);
+        let mut extra = std::mem::take(&mut summary.extra);
+        let measured = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            crate::contact::summarize(scene, c, model, &state, solver.nodal_forces(), &mut extra);
+        }));
+        if measured.is_err() {
+            problems.push("the contact and drape measures failed (see the message above)".into());
+        }
+        summary.extra = extra;
     }
     if built.interply.is_some() {
         for (name, v) in solver.nodal_forces().iter().filter_map(|c| c.summary()) {
             summary.extra.entry(name).or_insert(v);
         }
-    }
-    if let Some(e) = io_error {
-        return Err(RunError::Io(e));
     }
     let status = match &result {
         Ok(()) => "completed".to_string(),
@@ -143,26 +154,37 @@ pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &m
         if let Err(e) = &result {
             // Leave the last converged state for inspection.
             let name = format!("{}_last_converged.vtu", scene.name);
-            write_state_vtu(&dir.join(&name), model, &state, &export).map_err(|e| RunError::Io(e.to_string()))?;
-            pvd_entries.push((e.last_converged_time, name));
+            match write_state_vtu(&dir.join(&name), model, &state, &export) {
+                Ok(()) => pvd_entries.push((e.last_converged_time, name)),
+                Err(e) => problems.push(format!("{name}: {e}")),
+            }
         }
         let pvd_name = format!("{}.pvd", scene.name);
-        pvd::write_pvd(&dir.join(&pvd_name), &pvd_entries).map_err(|e| RunError::Io(e.to_string()))?;
         summary.files = pvd_entries.iter().map(|e| e.1.clone()).collect();
         summary.files.append(&mut mode_files);
-        summary.files.push(pvd_name);
+        match pvd::write_pvd(&dir.join(&pvd_name), &pvd_entries) {
+            Ok(()) => summary.files.push(pvd_name),
+            Err(e) => problems.push(format!("{pvd_name}: {e}")),
+        }
         if garment_export {
             let flat = format!("{}_pattern.vtu", scene.name);
-            crate::garment::export::write_garment_vtu(&dir.join(&flat), model, None, built.garment.as_ref(), &built.seams, None, export.binary)
-                .map_err(|e| RunError::Io(e.to_string()))?;
-            let gpvd = format!("{}_garment.pvd", scene.name);
-            pvd::write_pvd(&dir.join(&gpvd), &garment_entries).map_err(|e| RunError::Io(e.to_string()))?;
             summary.files.extend(garment_entries.iter().map(|e| e.1.clone()));
-            summary.files.push(flat);
-            summary.files.push(gpvd);
+            match crate::garment::export::write_garment_vtu(&dir.join(&flat), model, None, built.garment.as_ref(), &built.seams, None, export.binary) {
+                Ok(()) => summary.files.push(flat),
+                Err(e) => problems.push(format!("{flat}: {e}")),
+            }
+            let gpvd = format!("{}_garment.pvd", scene.name);
+            match pvd::write_pvd(&dir.join(&gpvd), &garment_entries) {
+                Ok(()) => summary.files.push(gpvd),
+                Err(e) => problems.push(format!("{gpvd}: {e}")),
+            }
         }
-        if let Some(name) = write_monitor_plot(dir, scene, built, &summary).map_err(RunError::Io)? {
-            summary.files.push(name);
+        let plotted = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| write_monitor_plot(dir, scene, built, &summary)));
+        match plotted {
+            Ok(Ok(Some(name))) => summary.files.push(name),
+            Ok(Ok(None)) => {}
+            Ok(Err(e)) => problems.push(format!("monitor plot: {e}")),
+            Err(_) => problems.push("monitor plot: the plotting library failed (see the message above)".into()),
         }
         summary.files.push("summary.json".into());
         export_s += t.elapsed().as_secs_f64();
@@ -170,13 +192,17 @@ pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &m
     summary.export_s = export_s;
     summary.wall_s = t0.elapsed().as_secs_f64();
     summary.peak_memory_mib = peak_memory_mib();
+    if !problems.is_empty() {
+        summary.extra.insert("output_problems".into(), serde_json::json!(problems));
+    }
     if let Some(dir) = &options.out_dir {
         let json = serde_json::to_vec_pretty(&summary).map_err(|e| RunError::Io(e.to_string()))?;
         crate::io::atomic::write_atomic(&dir.join("summary.json"), &json).map_err(|e| RunError::Io(e.to_string()))?;
     }
     match result {
-        Ok(()) => Ok(summary),
         Err(error) => Err(RunError::Solve { error, summary: Box::new(summary) }),
+        Ok(()) if !problems.is_empty() => Err(RunError::Io(format!("{} (summary.json was written)", problems.join("; ")))),
+        Ok(()) => Ok(summary),
     }
 }
 

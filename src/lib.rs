@@ -30,3 +30,5 @@ pub mod results;
 pub mod bench;
 pub mod contact;
 pub mod garment;
+pub mod budget;
+pub mod fuzz;

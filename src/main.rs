@@ -1,5 +1,6 @@
 //! Command line: `plyshell solve`, `plyshell demo`, `plyshell check`, `plyshell bench`.
 
+use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -21,6 +22,24 @@ const DEMO_NAME: &str = "garments/nbc_sleeve.ron (bundled)";
 struct Cli {
     #[command(subcommand)]
     command: Command,
+    /// Memory budget for the model, tangent and factor (e.g. 8G, 512M); default 60 % of the
+    /// available memory. Scenes estimated to need more are refused before allocating.
+    #[arg(long, global = true, value_parser = plyshell::budget::parse_size)]
+    max_memory: Option<u64>,
+}
+
+/// Prints a line to stdout; a closed pipe (`plyshell check S | head -1`) is not an error.
+macro_rules! say {
+    ($($t:tt)*) => {{
+        let _ = writeln!(std::io::stdout(), $($t)*);
+    }};
+}
+
+/// Prints a line to stderr, ignoring a closed stream.
+macro_rules! warn {
+    ($($t:tt)*) => {{
+        let _ = writeln!(std::io::stderr(), $($t)*);
+    }};
 }
 
 #[derive(Subcommand)]
@@ -48,6 +67,35 @@ enum Command {
         /// Scene file (RON).
         scene: PathBuf,
     },
+    /// Mutational fuzzing of the scene files (developer tool): mutants of every .ron under
+    /// CORPUS run through `check` (and a sample through `solve`) in capped subprocesses.
+    #[command(hide = true)]
+    Fuzz {
+        /// Directory of scene files to mutate.
+        #[arg(long, default_value = "garments")]
+        corpus: PathBuf,
+        /// Seed of the first mutant.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Number of check mutants.
+        #[arg(long, default_value_t = 2000)]
+        count: usize,
+        /// Solve every N-th mutant of a small scene (0: never).
+        #[arg(long, default_value_t = 50)]
+        solve_every: usize,
+        /// Parallel subprocesses.
+        #[arg(long, default_value_t = 2)]
+        jobs: usize,
+        /// Scratch directory (failing mutants are kept in its failures/).
+        #[arg(long, default_value = "target/fuzz-work")]
+        work: PathBuf,
+        /// Seconds before a check counts as a hang.
+        #[arg(long, default_value_t = 10.0)]
+        check_timeout: f64,
+        /// Seconds a sampled solve may run.
+        #[arg(long, default_value_t = 20.0)]
+        solve_timeout: f64,
+    },
     /// Run the verification benchmarks at several mesh sizes: table, JSON and error-vs-time plot.
     Bench {
         /// Write the records as JSON here (the plot goes beside it as .svg).
@@ -61,6 +109,7 @@ enum Command {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    plyshell::budget::set_limit(cli.max_memory);
     let result = match cli.command {
         Command::Solve { scene, out, quiet } => scene::load(&scene)
             .map_err(|e| e.to_string())
@@ -71,37 +120,70 @@ fn main() -> ExitCode {
             .and_then(|(s, b)| solve(&s, &b, &out, false)),
         Command::Check { scene } => scene::load(&scene).map_err(|e| e.to_string()).map(|(s, b)| check(&s, &b)),
         Command::Bench { json, quick } => bench::run_all(&json, quick).map_err(|e| e.to_string()),
+        Command::Fuzz { corpus, seed, count, solve_every, jobs, work, check_timeout, solve_timeout } => {
+            fuzz(corpus, seed, count, solve_every, jobs, work, check_timeout, solve_timeout)
+        }
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {e}");
+            warn!("error: {e}");
             ExitCode::FAILURE
         }
     }
 }
 
+#[allow(clippy::too_many_arguments)]
+fn fuzz(corpus: PathBuf, seed: u64, count: usize, solve_every: usize, jobs: usize, work: PathBuf, check_timeout: f64, solve_timeout: f64) -> Result<(), String> {
+    use plyshell::fuzz::{self, FuzzConfig};
+    let exe = std::env::current_exe().map_err(|e| e.to_string())?;
+    let secs = |s: f64| std::time::Duration::from_secs_f64(if s.is_finite() && s > 0.0 { s.min(86_400.0) } else { 10.0 });
+    let cfg = FuzzConfig {
+        exe,
+        corpus: fuzz::corpus(&corpus),
+        seed,
+        count,
+        solve_every,
+        solve_scenes: fuzz::SOLVE_SCENES.iter().map(|s| s.to_string()).collect(),
+        check_timeout: secs(check_timeout),
+        solve_timeout: secs(solve_timeout),
+        memory_cap: 4 << 30,
+        budget: 1 << 30,
+        jobs,
+        work,
+    };
+    if cfg.corpus.is_empty() {
+        return Err(format!("no .ron files under {}", corpus.display()));
+    }
+    let report = fuzz::run(&cfg).map_err(|e| e.to_string())?;
+    say!("{report}");
+    if report.failures.is_empty() { Ok(()) } else { Err(format!("{} failing mutants", report.failures.len())) }
+}
+
 fn check(scene: &Scene, built: &BuiltScene) {
     let m = &built.model;
-    println!("scene '{}': {} parts, {} nodes, {} elements, {} free DOFs", scene.name, m.parts.len(), m.n_nodes(), m.elements.len(), m.dofs.n_free);
+    say!("scene '{}': {} parts, {} nodes, {} elements, {} free DOFs", scene.name, m.parts.len(), m.n_nodes(), m.elements.len(), m.dofs.n_free);
     for (name, q) in &built.quality {
-        println!(
+        say!(
             "  part {name}: angles {:.1}°..{:.1}°, max aspect {:.2}, min Jacobian ratio {:.3}",
             q.min_angle_deg, q.max_angle_deg, q.max_aspect_ratio, q.min_jacobian_ratio
         );
     }
     if !built.seams.is_empty() {
-        println!("  {} seams, {} tied DOFs", built.seams.len(), m.dofs.ties.len());
+        say!("  {} seams, {} tied DOFs", built.seams.len(), m.dofs.ties.len());
     }
     for w in &built.warnings {
-        eprintln!("{w}");
+        warn!("{w}");
     }
     for w in built.contact.iter().flat_map(|c| &c.warnings) {
-        eprintln!("warning: {w}");
+        warn!("warning: {w}");
     }
 }
 
 fn solve(scene: &Scene, built: &BuiltScene, out: &Path, quiet: bool) -> Result<(), String> {
+    if out.exists() && !out.is_dir() {
+        return Err(format!("--out {}: exists and is not a directory; name a directory for the results", out.display()));
+    }
     check(scene, built);
     let bar = if quiet { ProgressBar::hidden() } else { ProgressBar::new(1000) };
     bar.set_style(
@@ -119,7 +201,7 @@ fn solve(scene: &Scene, built: &BuiltScene, out: &Path, quiet: bool) -> Result<(
     bar.finish_and_clear();
     match result {
         Ok(s) => {
-            println!(
+            say!(
                 "solved in {:.2} s ({} increments, {} Newton iterations; assembly {:.2} s, factorization {:.2} s, solve {:.2} s)",
                 s.wall_s,
                 s.increments.len(),
@@ -131,17 +213,16 @@ fn solve(scene: &Scene, built: &BuiltScene, out: &Path, quiet: bool) -> Result<(
             for h in &s.monitors {
                 if let Some(last) = h.values.last() {
                     let vals: Vec<String> = h.quantities.iter().zip(last).map(|(q, v)| format!("{q} = {v:.6e}")).collect();
-                    println!("  {} (node {}): {}", h.name, h.node, vals.join(", "));
+                    say!("  {} (node {}): {}", h.name, h.node, vals.join(", "));
                 }
             }
-            println!("results in {}: {}", out.display(), s.files.join(", "));
+            say!("results in {}: {}", out.display(), s.files.join(", "));
             Ok(())
         }
-        Err(RunError::Solve { error, summary }) => Err(format!(
-            "{error}\nthe last converged state and summary.json are in {} ({})",
-            out.display(),
-            summary.files.join(", ")
-        )),
+        Err(RunError::Solve { error, summary }) => {
+            let last = summary.files.iter().find(|f| f.ends_with("_last_converged.vtu")).map_or("(not written)", String::as_str);
+            Err(format!("{error}\nthe last converged state is {}; summary.json and the time series ({} files) are in {}", out.join(last).display(), summary.files.len(), out.display()))
+        }
         Err(e) => Err(e.to_string()),
     }
 }

@@ -42,7 +42,7 @@ fn solve(text: &str) -> (BuiltScene, State, Vec<IncrementReport>) {
     let mut reports = Vec::new();
     let state = {
         let mut solver = Solver::new(&built.model, sc.solver.clone()).expect("solver");
-        plyshell::contact::attach(&mut solver, &built.model, built.contact.as_ref().expect("contact"));
+        plyshell::contact::attach(&mut solver, &built.model, built.contact.as_ref().expect("contact")).expect("contact attaches");
         let mut state = built.model.initial_state();
         solver.run(&built.steps, &mut state, &mut |r, _, _| reports.push(r.clone()), &mut |_| {}).expect("solve");
         state
@@ -365,7 +365,7 @@ fn cloth_draped_over_the_torso_mesh_comes_to_rest_without_penetration() {
     let mut reports = Vec::new();
     let st = {
         let mut solver = Solver::new(&built.model, sc.solver.clone()).expect("solver");
-        plyshell::contact::attach(&mut solver, &built.model, built.contact.as_ref().expect("contact"));
+        plyshell::contact::attach(&mut solver, &built.model, built.contact.as_ref().expect("contact")).expect("contact attaches");
         let mut state = built.model.initial_state();
         solver.run(&built.steps, &mut state, &mut |r, _, _| reports.push(r.clone()), &mut |_| {}).expect("solve");
         state

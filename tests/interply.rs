@@ -243,7 +243,7 @@ fn three_ply_strip_bent_over_a_cylinder_keeps_its_plies_apart() {
     let model = &built.model;
     let t = std::time::Instant::now();
     let mut solver = Solver::new(model, sc.solver.clone()).expect("solver");
-    plyshell::contact::attach(&mut solver, model, built.contact.as_ref().expect("contact"));
+    plyshell::contact::attach(&mut solver, model, built.contact.as_ref().expect("contact")).expect("contact attaches");
     plyshell::contact::interply::attach(&mut solver, model, built.interply.as_ref().expect("interply"));
     let mut state = model.initial_state();
     let mut reports = Vec::new();

@@ -39,7 +39,7 @@ fn nbc_hood_is_sewn_and_rests_on_the_mannequin() {
     let mut reports = Vec::new();
     let mut state = model.initial_state();
     let mut solver = Solver::new(model, sc.solver.clone()).expect("solver");
-    plyshell::contact::attach(&mut solver, model, built.contact.as_ref().expect("contact"));
+    plyshell::contact::attach(&mut solver, model, built.contact.as_ref().expect("contact")).expect("contact attaches");
     solver.run(&built.steps, &mut state, &mut |r, _, _| reports.push(r.clone()), &mut |_| {}).unwrap_or_else(|e| panic!("{e}"));
     let iterations: usize = reports.iter().map(|r| r.iterations).sum();
     println!(

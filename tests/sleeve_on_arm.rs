@@ -41,7 +41,7 @@ fn sleeve_rests_on_the_arm_without_penetrating_it_and_stays_sewn() {
     let mut reports = Vec::new();
     let mut state = model.initial_state();
     let mut solver = Solver::new(model, sc.solver.clone()).expect("solver");
-    plyshell::contact::attach(&mut solver, model, built.contact.as_ref().expect("contact"));
+    plyshell::contact::attach(&mut solver, model, built.contact.as_ref().expect("contact")).expect("contact attaches");
     solver.run(&built.steps, &mut state, &mut |r, _, _| reports.push(r.clone()), &mut |_| {}).unwrap_or_else(|e| panic!("{e}"));
     let iterations: usize = reports.iter().map(|r| r.iterations).sum();
     println!(

@@ -33,13 +33,29 @@ pub struct DrapeReport {
     pub max_penetration: f64,
 }
 
+/// Most cells along a side of the shadow raster (16.8 M cells, 16 MB).
+pub const MAX_RASTER_SIDE: usize = 4096;
+
+/// The raster cell size used for a requested `res` over a half-width `extent`: `res`, or the
+/// coarsest cell that keeps the raster within [`MAX_RASTER_SIDE`] cells a side.
+pub fn raster_resolution(extent: f64, res: f64) -> f64 {
+    res.max(2.0 * extent / MAX_RASTER_SIDE as f64)
+}
+
 /// Area of the vertical (xy) projection of the deformed mid-surface: every quad is split
 /// into two triangles and a square raster of cell `res` about `center` is marked where the
 /// cell centre falls in a projected triangle or in the support disc of radius `disc_radius`
 /// (the apparatus' shadow includes the disc, so a specimen's central hole hidden on the disc
 /// does not count as a gap). The error is O(perimeter·res).
+///
+/// The raster has at most [`MAX_RASTER_SIDE`]² cells: a finer `res` is coarsened to
+/// [`raster_resolution`]; a non-finite or non-positive extent or resolution gives NaN.
 pub fn shadow_area(model: &Model, state: &State, center: &Vector3<f64>, extent: f64, res: f64, disc_radius: f64) -> f64 {
-    let n = (2.0 * extent / res).ceil() as usize;
+    let res = raster_resolution(extent, res);
+    if !(res.is_finite() && res > 0.0 && extent.is_finite() && extent > 0.0) {
+        return f64::NAN;
+    }
+    let n = ((2.0 * extent / res).ceil() as usize).clamp(1, MAX_RASTER_SIDE);
     let origin = (center.x - extent, center.y - extent);
     let mut covered = vec![false; n * n];
     for j in 0..n {
@@ -150,6 +166,7 @@ pub fn folds(model: &Model, state: &State, center: &Vector3<f64>, specimen_radiu
 /// radius `disc_radius` centred at `center`, raster cell `res`.
 pub fn drape_report(model: &Model, state: &State, center: &Vector3<f64>, disc_radius: f64, specimen_radius: f64, res: f64, max_penetration: f64) -> DrapeReport {
     let pi = std::f64::consts::PI;
+    let res = raster_resolution(1.05 * specimen_radius, res);
     let shadow = shadow_area(model, state, center, 1.05 * specimen_radius, res, disc_radius);
     let disc = pi * disc_radius * disc_radius;
     let spec = pi * specimen_radius * specimen_radius;

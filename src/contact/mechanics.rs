@@ -153,6 +153,7 @@ pub struct ContactSet {
     pub increments: Vec<ContactIncrement>,
     /// The tangent is that of the stability test (normal penalty × `CONSTRAINT_LIMIT_FACTOR`).
     stability: bool,
+    last_potential: f64,
 }
 
 impl ContactSet {
@@ -202,12 +203,13 @@ impl ContactSet {
             reject_through: true,
             increments: Vec::new(),
             stability: false,
+            last_potential: 0.0,
         }
     }
 
     /// Evaluates every pair at `state`: per participating node the force (to add to f_int),
     /// the 3×3 tangent, and per pair the evaluation.
-    fn evaluate(&self, model: &Model, state: &State, with_tangent: bool) -> Vec<(Vector3<f64>, Matrix3<f64>, Vec<PairEval>)> {
+    fn evaluate(&self, model: &Model, state: &State, with_tangent: bool) -> Vec<(Vector3<f64>, Matrix3<f64>, Vec<PairEval>, f64)> {
         let nb = self.bodies.len();
         (0..self.nodes.len())
             .into_par_iter()
@@ -220,6 +222,7 @@ impl ContactSet {
                 let mut f = Vector3::zeros();
                 let mut kk = Matrix3::zeros();
                 let mut evals = vec![PairEval::default(); nb];
+                let mut pot = 0.0;
                 for (b, body) in self.bodies.iter().enumerate() {
                     // Search reach: the offset plus twice the node's spacing, so that a node a
                     // Newton step carried deeper than the offset is still seen (a bounded
@@ -234,6 +237,8 @@ impl ContactSet {
                         continue;
                     }
                     let n = prox.normal;
+                    // Φ = ⟨λ̂ − k g⟩²/(2k): −∂Φ/∂g = λ.
+                    pot += lambda * lambda / (2.0 * k);
                     f -= n * lambda;
                     if with_tangent {
                         let kn = if self.stability { k * CONSTRAINT_LIMIT_FACTOR } else { k };
@@ -253,6 +258,8 @@ impl ContactSet {
                         let sn = s.norm();
                         let cap = mu * lambda_f;
                         let arg = kt * sn / cap;
+                        // Φ_t = (μλ̄)²/k_t ln cosh(k_t|s|/(μλ̄)) (stable form).
+                        pot += cap * cap / kt * (arg + (-2.0 * arg).exp().ln_1p() - std::f64::consts::LN_2);
                         if sn > 0.0 {
                             let sh = s / sn;
                             // Smooth Coulomb law t = −μλ tanh(k_t|s|/(μλ)) ŝ.
@@ -275,7 +282,7 @@ impl ContactSet {
                 if with_tangent {
                     kk = (kk + kk.transpose()) * 0.5;
                 }
-                (f, kk, evals)
+                (f, kk, evals, pot)
             })
             .collect()
     }
@@ -287,7 +294,7 @@ impl ContactSet {
 
     /// Resultant contact force on the shell (N) at the last evaluation, summed over nodes.
     pub fn resultant(&self, model: &Model, state: &State) -> Vector3<f64> {
-        self.evaluate(model, state, false).iter().map(|(f, _, _)| -f).sum()
+        self.evaluate(model, state, false).iter().map(|(f, _, _, _)| -f).sum()
     }
 }
 
@@ -321,13 +328,17 @@ impl NodalForces for ContactSet {
         let out = self.evaluate(model, state, true);
         self.search_s += t.elapsed().as_secs_f64();
         let nb = self.bodies.len();
-        for (i, (f, kk, ev)) in out.iter().enumerate() {
+        self.last_potential = out.iter().map(|o| o.3).sum();
+        for (i, (f, kk, ev, _)) in out.iter().enumerate() {
             let a = self.nodes[i];
             // A Newton step that carries a free node from above a body to below its surface
             // (mid-surface through the body) would be answered by a huge penalty force and
             // the iteration would chatter between contact and separation: reject the trial
             // state so the step is shortened instead.
             let through = self.reject_through && ev.iter().any(|e| e.active && -e.gap > self.offset[i]);
+            if through {
+                self.last_potential = f64::INFINITY;
+            }
             for k in 0..3 {
                 f_ext[NODE_DOFS * a + k] -= if through { f64::NAN } else { f[k] };
             }
@@ -345,7 +356,7 @@ impl NodalForces for ContactSet {
         let nb = self.bodies.len();
         let mut rep = ContactIncrement::default();
         let mut resultant = Vector3::zeros();
-        for (i, (f, _, evals)) in out.iter().enumerate() {
+        for (i, (f, _, evals, _)) in out.iter().enumerate() {
             let a = self.nodes[i];
             let x = model.x0[a] + state.u[a];
             resultant -= f;
@@ -393,6 +404,12 @@ impl NodalForces for ContactSet {
 
     fn search_seconds(&self) -> f64 {
         self.search_s
+    }
+
+    /// Σ ⟨λ̂ − k g⟩²/(2k) + friction potential (lagged normal force and plane) at the last
+    /// evaluation.
+    fn potential(&self) -> Option<f64> {
+        Some(self.last_potential)
     }
 
     fn stability_tangent(&mut self, on: bool) {

@@ -1,6 +1,7 @@
 //! Contact of shell nodes with rigid bodies (parry3d), viscous stabilization for static steps
 //! and drape measures.
 
+pub mod barrier;
 pub mod body;
 pub mod drape;
 pub mod interply;
@@ -14,6 +15,7 @@ use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 use parry3d_f64::math::Vector as PVec;
 use parry3d_f64::shape::{Ball, Capsule, Cuboid, Cylinder};
 
+pub use barrier::{BarrierContact, BarrierSettings};
 pub use body::{Proximity, RigidBody, Shape};
 pub use mechanics::{ContactIncrement, ContactSet, ContactSettings};
 pub use stabilize::Stabilization;
@@ -28,8 +30,10 @@ pub struct ContactSetup {
     pub bodies: Vec<RigidBody>,
     /// Participating part indices (empty: all).
     pub parts: Vec<usize>,
-    /// Penalty controls.
+    /// Penalty controls (augmented Lagrangian).
     pub settings: ContactSettings,
+    /// Barrier controls; None: the augmented-Lagrangian penalty formulation.
+    pub barrier: Option<BarrierSettings>,
     /// Viscous stabilization coefficient (N/m³), if any.
     pub stabilization: Option<f64>,
     /// Warnings from mesh repair (file: what was repaired).
@@ -124,6 +128,17 @@ pub fn build_contact(spec: &ContactSpec, loc: &Locator, base_dir: &Path, parts: 
     if !pos(spec.tangential_factor) {
         return Err(loc.at(None, Some("tangential_factor"), "contact.tangential_factor", "expected a positive tangential factor"));
     }
+    let barrier = match &spec.formulation {
+        crate::scene::ContactFormulation::AugmentedLagrangian => None,
+        crate::scene::ContactFormulation::Barrier { distance_factor, stiffness_factor, friction_slip } => {
+            for (key, v) in [("distance_factor", distance_factor), ("stiffness_factor", stiffness_factor), ("friction_slip", friction_slip)] {
+                if !pos(*v) {
+                    return Err(loc.at(None, Some(key), format!("contact.formulation.{key}"), format!("expected a positive number, found {v}")));
+                }
+            }
+            Some(BarrierSettings { distance_factor: *distance_factor, stiffness_factor: *stiffness_factor, friction_slip: *friction_slip })
+        }
+    };
     if spec.stabilization.is_some_and(|c| !pos(c)) {
         return Err(loc.at(None, Some("stabilization"), "contact.stabilization", "expected a positive stabilization coefficient (N/m³)"));
     }
@@ -131,18 +146,35 @@ pub fn build_contact(spec: &ContactSpec, loc: &Locator, base_dir: &Path, parts: 
         bodies,
         parts: part_ids,
         settings: ContactSettings { penalty_factor: spec.penalty_factor, penalty: spec.penalty, tangential_factor: spec.tangential_factor },
+        barrier,
         stabilization: spec.stabilization,
         warnings,
     })
 }
 
 /// Adds the contact and stabilization terms of `setup` to `solver` (drape falls and settles
-/// in a `Dynamic` step of the solver, `solver::dynamics`).
-pub fn attach<'m>(solver: &mut crate::solver::Solver<'m>, model: &'m crate::model::Model, setup: &ContactSetup) {
-    solver.add_nodal_forces(Box::new(ContactSet::new(model, setup.bodies.clone(), &setup.parts, &setup.settings)));
+/// in a `Dynamic` step of the solver, `solver::dynamics`). A barrier formulation needs an
+/// intersection-free start: a node whose shell face starts on or inside a body is an error.
+pub fn attach<'m>(solver: &mut crate::solver::Solver<'m>, model: &'m crate::model::Model, setup: &ContactSetup) -> Result<(), String> {
+    match &setup.barrier {
+        Some(b) => {
+            let c = BarrierContact::new(model, setup.bodies.clone(), &setup.parts, b);
+            let bad = c.intersections(model, &model.initial_state());
+            if let Some((node, body, gap)) = bad.first() {
+                return Err(format!(
+                    "{} node(s) start with the shell face on or inside a body (node {node} in '{body}' by {:.3e} m); barrier contact needs a gap: move the body or the part",
+                    bad.len(),
+                    -gap
+                ));
+            }
+            solver.add_nodal_forces(Box::new(c));
+        }
+        None => solver.add_nodal_forces(Box::new(ContactSet::new(model, setup.bodies.clone(), &setup.parts, &setup.settings))),
+    }
     if let Some(k) = setup.stabilization {
         solver.add_nodal_forces(Box::new(Stabilization::new(model, k)));
     }
+    Ok(())
 }
 
 /// Largest penetration of any shell node's face (offset h/2) into any body at `state`, by

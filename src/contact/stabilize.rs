@@ -27,6 +27,7 @@ pub struct Stabilization {
     previous: Vec<Vector3<f64>>,
     /// Per committed increment: ‖f_visc‖ and the largest nodal motion.
     pub history: Vec<StabilizationIncrement>,
+    last_potential: f64,
 }
 
 /// What the stabilization did in one increment.
@@ -48,19 +49,27 @@ impl Stabilization {
                 area[n] += 0.25 * a;
             }
         }
-        Self { coefficient: c, area, previous: vec![Vector3::zeros(); model.n_nodes()], history: Vec::new() }
+        Self { coefficient: c, area, previous: vec![Vector3::zeros(); model.n_nodes()], history: Vec::new(), last_potential: 0.0 }
     }
 }
 
 impl NodalForces for Stabilization {
     fn add(&mut self, _model: &Model, state: &State, f_ext: &mut [f64], jacobian: &mut Vec<(usize, Matrix3<f64>)>) {
+        let mut pot = 0.0;
         for (n, (&a, prev)) in self.area.iter().zip(&self.previous).enumerate() {
             let f = (state.u[n] - prev) * (self.coefficient * a);
+            pot += 0.5 * self.coefficient * a * (state.u[n] - prev).norm_squared();
             for k in 0..3 {
                 f_ext[NODE_DOFS * n + k] -= f[k];
             }
             jacobian.push((n, Matrix3::identity() * (-self.coefficient * a)));
         }
+        self.last_potential = pot;
+    }
+
+    /// ½ c a |u − u_prev|² summed over the nodes, at the current previous state.
+    fn potential(&self) -> Option<f64> {
+        Some(self.last_potential)
     }
 
     fn commit(&mut self, _model: &Model, state: &State) -> Option<serde_json::Value> {

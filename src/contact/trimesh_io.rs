@@ -21,6 +21,9 @@ pub struct TriSoup {
 /// and checks/repairs it. Returns the mesh and the repair warnings.
 pub fn read_trimesh(path: &Path) -> Result<(TriSoup, Vec<String>), String> {
     let name = path.display().to_string();
+    // The bytes and the parsed triangles: a few times the file's size, within the budget.
+    let len = std::fs::metadata(path).map_err(|e| format!("cannot read {name}: {e}"))?.len();
+    crate::budget::check_alloc(&format!("reading the mesh file {name} ({len} bytes)"), len, 4)?;
     let bytes = std::fs::read(path).map_err(|e| format!("cannot read {name}: {e}"))?;
     let ext = path.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase()).unwrap_or_default();
     let soup = match ext.as_str() {

@@ -296,6 +296,36 @@ impl GarmentMesh {
         super::export::GarmentLayout { panels: spec.panels.iter().map(|p| p.name.clone()).collect(), plies, materials, part_tags, flat }
     }
 
+    /// Warnings for seams that look sewn crossed: with each side's row as given (`reversed`),
+    /// the placed span ends meet much farther apart than they would the other way round
+    /// (the sum of the two end gaps more than twice the crossed one and more than a fifth of
+    /// the span) — typically a wrong `b.reversed`.
+    pub fn crossed_seams(&self, spec: &GarmentSpec, loc: &Locator) -> Vec<SceneError> {
+        let mut out = Vec::new();
+        let panel_index = |name: &str| spec.panels.iter().position(|p| p.name == name);
+        for s in &spec.seams {
+            let (Some(pa), Some(pb)) = (panel_index(&s.a.panel), panel_index(&s.b.panel)) else { continue };
+            let ends = |pi: usize, side: &SpanRef| -> Option<(Vector3<f64>, Vector3<f64>, f64)> {
+                let p = &spec.panels[pi];
+                let row = span_row(&self.patterns[pi], &self.sample_ranges[pi], p, side);
+                let uv = &self.patterns[pi].uv;
+                let pts: Vec<Vector3<f64>> = row.iter().map(|&n| p.placement.map(uv[n])).collect();
+                let length = pts.windows(2).map(|w| (w[1] - w[0]).norm()).sum();
+                Some((*pts.first()?, *pts.last()?, length))
+            };
+            let (Some((a0, a1, la)), Some((b0, b1, lb))) = (ends(pa, &s.a), ends(pb, &s.b)) else { continue };
+            let given = (a0 - b0).norm() + (a1 - b1).norm();
+            let crossed = (a0 - b1).norm() + (a1 - b0).norm();
+            if given > 2.0 * crossed && given > 0.2 * la.max(lb) {
+                out.push(loc.at(Some(&s.name), Some("b"), format!("garment.seams[{}].b.reversed", s.name), format!(
+                    "warning: seam \"{}\" looks sewn crossed: as given its ends are {given:.4} m apart (sum of both ends), the other way round {crossed:.4} m; check `reversed` (now {})",
+                    s.name, s.b.reversed
+                )));
+            }
+        }
+        out
+    }
+
     /// Warnings for connected groups of panels of which no node is supported (`supported`
     /// tells, per garment part, whether any of its nodes has a fixed DOF).
     pub fn unsupported(&self, spec: &GarmentSpec, loc: &Locator, supported: &[bool]) -> Vec<SceneError> {

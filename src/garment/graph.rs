@@ -86,7 +86,13 @@ pub fn sampled_outline(p: &PanelSpec, h: f64) -> Result<SampledOutline, String> 
             while sweep <= -std::f64::consts::PI {
                 sweep += std::f64::consts::TAU;
             }
-            let k = ((r * sweep.abs()) / h).ceil().max(2.0) as usize;
+            let kf = ((r * sweep.abs()) / h).ceil().max(2.0);
+            if !(kf <= MAX_OUTLINE_POINTS as f64) || points.len() + kf as usize > MAX_OUTLINE_POINTS {
+                return Err(format!(
+                    "sampling the curved edges at the element size {h} would take more than {MAX_OUTLINE_POINTS} outline points; use a larger element_size"
+                ));
+            }
+            let k = kf as usize;
             for j in 1..k {
                 let t = ta + sweep * j as f64 / k as f64;
                 points.push([centre[0] + r * t.cos(), centre[1] + r * t.sin()]);
@@ -133,20 +139,88 @@ fn segments_intersect(p1: [f64; 2], p2: [f64; 2], q1: [f64; 2], q2: [f64; 2]) ->
     (d1 == 0.0 && on(q1, q2, p1)) || (d2 == 0.0 && on(q1, q2, p2)) || (d3 == 0.0 && on(p1, p2, q1)) || (d4 == 0.0 && on(p1, p2, q2))
 }
 
-/// First pair of non-adjacent outline segments that intersect, if any.
-pub fn self_intersection(outline: &[[f64; 2]]) -> Option<(usize, usize)> {
+/// Most points an outline may have after its curved edges are sampled.
+pub const MAX_OUTLINE_POINTS: usize = 1_000_000;
+
+/// Largest |coordinate| of a pattern outline (m): pieces of cloth, not maps.
+pub const MAX_COORDINATE: f64 = 1.0e4;
+
+/// Most segment-pair tests [`self_intersection`] makes before it gives up.
+const MAX_PAIR_TESTS: u64 = 200_000_000;
+
+/// Whether segments i and j of an n-gon share a vertex.
+fn adjacent(i: usize, j: usize, n: usize) -> bool {
+    let (i, j) = (i.min(j), i.max(j));
+    j == i + 1 || (i == 0 && j == n - 1)
+}
+
+/// First pair (i, j), i < j, of non-adjacent outline segments that intersect, if any, in
+/// lexicographic order. Segments are bucketed in a uniform grid of about n cells over the
+/// outline's bounding box and only segments sharing a cell are tested, so the cost is
+/// near-linear when segments are short against the piece (sampled curves); an outline so
+/// tangled that more than 2·10⁸ pairs would be tested is an error.
+pub fn self_intersection(outline: &[[f64; 2]]) -> Result<Option<(usize, usize)>, String> {
     let n = outline.len();
-    for i in 0..n {
-        for j in i + 1..n {
-            if j == i + 1 || (i == 0 && j == n - 1) {
-                continue;
+    let seg = |i: usize| (outline[i], outline[(i + 1) % n]);
+    if n < 64 {
+        for i in 0..n {
+            for j in i + 1..n {
+                if !adjacent(i, j, n) && segments_intersect(seg(i).0, seg(i).1, seg(j).0, seg(j).1) {
+                    return Ok(Some((i, j)));
+                }
             }
-            if segments_intersect(outline[i], outline[(i + 1) % n], outline[j], outline[(j + 1) % n]) {
-                return Some((i, j));
+        }
+        return Ok(None);
+    }
+    if outline.iter().flatten().any(|v| !v.is_finite()) {
+        return Err("the outline has a non-finite vertex".into());
+    }
+    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+    for p in outline {
+        for k in 0..2 {
+            lo[k] = lo[k].min(p[k]);
+            hi[k] = hi[k].max(p[k]);
+        }
+    }
+    let g = ((n as f64).sqrt().ceil() as usize).clamp(1, 4096);
+    let size = [(hi[0] - lo[0]) / g as f64, (hi[1] - lo[1]) / g as f64];
+    let cell = |x: f64, k: usize| if size[k] > 0.0 { (((x - lo[k]) / size[k]) as usize).min(g - 1) } else { 0 };
+    let mut cells: Vec<Vec<u32>> = vec![Vec::new(); g * g];
+    let mut inserted: u64 = 0;
+    for i in 0..n {
+        let (a, b) = seg(i);
+        let (i0, i1) = (cell(a[0].min(b[0]), 0), cell(a[0].max(b[0]), 0));
+        let (j0, j1) = (cell(a[1].min(b[1]), 1), cell(a[1].max(b[1]), 1));
+        inserted += ((i1 - i0 + 1) * (j1 - j0 + 1)) as u64;
+        if inserted > MAX_PAIR_TESTS {
+            return Err(format!("the outline of {n} segments is too tangled to check for self-intersection"));
+        }
+        for cj in j0..=j1 {
+            for ci in i0..=i1 {
+                cells[cj * g + ci].push(i as u32);
             }
         }
     }
-    None
+    let mut tests: u64 = 0;
+    let mut best: Option<(usize, usize)> = None;
+    for c in &cells {
+        tests += (c.len() as u64).pow(2) / 2;
+        if tests > MAX_PAIR_TESTS {
+            return Err(format!("the outline of {n} segments is too tangled to check for self-intersection"));
+        }
+        for (x, &i) in c.iter().enumerate() {
+            for &j in &c[x + 1..] {
+                let (i, j) = ((i.min(j)) as usize, (i.max(j)) as usize);
+                if adjacent(i, j, n) || best.is_some_and(|b| b <= (i, j)) {
+                    continue;
+                }
+                if segments_intersect(seg(i).0, seg(i).1, seg(j).0, seg(j).1) {
+                    best = Some((i, j));
+                }
+            }
+        }
+    }
+    Ok(best)
 }
 
 impl GarmentGraph {
@@ -183,7 +257,21 @@ impl GarmentGraph {
             if p.outline.len() < 3 || p.outline.iter().flatten().any(|v| !v.is_finite()) {
                 return Err(err("outline", format!("panel \"{}\": the outline needs at least 3 finite vertices", p.name)));
             }
-            if let Some((i, j)) = self_intersection(&p.outline) {
+            if let Some(v) = p.outline.iter().position(|v| v[0].abs().max(v[1].abs()) > MAX_COORDINATE) {
+                return Err(err("outline", format!(
+                    "panel \"{}\": outline vertex {v} ({:e}, {:e}) lies beyond ±{MAX_COORDINATE:e} m; pattern coordinates are in metres",
+                    p.name, p.outline[v][0], p.outline[v][1]
+                )));
+            }
+            let est = super::mesh::estimate_nodes(&p.outline, spec.element_size);
+            if !(est <= super::mesh::MAX_PATTERN_NODES as f64) {
+                return Err(loc.at(None, Some("element_size"), "garment.element_size", format!(
+                    "element size {} is too small for panel \"{}\": its mesh would have about {est:.2e} nodes (limit {} per panel)",
+                    spec.element_size, p.name, super::mesh::MAX_PATTERN_NODES
+                )));
+            }
+            let crossing = self_intersection(&p.outline).map_err(|e| err("outline", format!("panel \"{}\": {e}", p.name)))?;
+            if let Some((i, j)) = crossing {
                 return Err(err("outline", format!("panel \"{}\": the outline intersects itself (segments {i}–{} and {j}–{})", p.name, i + 1, (j + 1) % p.outline.len())));
             }
             if signed_area(&p.outline) <= 0.0 {
@@ -196,7 +284,7 @@ impl GarmentGraph {
                 }
             }
             let (sampled, _) = sampled_outline(p, spec.element_size).map_err(|e| err("curves", format!("panel \"{}\": {e}", p.name)))?;
-            if self_intersection(&sampled).is_some() {
+            if self_intersection(&sampled).map_err(|e| err("curves", format!("panel \"{}\": {e}", p.name)))?.is_some() {
                 return Err(err("curves", format!("panel \"{}\": a curved edge makes the outline intersect itself", p.name)));
             }
             if p.plies.is_empty() {
@@ -263,6 +351,23 @@ impl GarmentGraph {
             }
             if l.points.len() < 2 || spec.stitch_lines[..li].iter().any(|m| m.name == l.name) {
                 return Err(loc.at(Some(&l.name), Some("points"), format!("{field}.points"), "a stitch line needs a unique name and at least two points"));
+            }
+            // Every point on the panel (inside its outline, or within half an element of it).
+            if let Some(pi) = panel_index(&l.panel) {
+                let p = &spec.panels[pi];
+                let (outline, _) = sampled_outline(p, spec.element_size).map_err(|e| loc.at(Some(&p.name), Some("curves"), format!("garment.panels[{}].curves", p.name), e))?;
+                let m = outline.len();
+                for (k, q) in l.points.iter().enumerate() {
+                    let near = q.iter().all(|v| v.is_finite())
+                        && (super::mesh::point_in_polygon(*q, &outline)
+                            || (0..m).any(|i| super::mesh::point_segment_distance(*q, outline[i], outline[(i + 1) % m]) <= 0.5 * spec.element_size));
+                    if !near {
+                        return Err(loc.at(Some(&l.name), Some("points"), format!("{field}.points[{k}]"), format!(
+                            "stitch line \"{}\": point {k} ({}, {}) lies outside panel \"{}\"",
+                            l.name, q[0], q[1], l.panel
+                        )));
+                    }
+                }
             }
         }
         Ok(Self { graph, panel_node, seam_edge })

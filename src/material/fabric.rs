@@ -304,6 +304,11 @@ impl ShellMaterial for Fabric {
     fn small_strain_moduli(&self) -> (f64, f64) {
         (self.props.warp_tensile.max(self.props.weft_tensile) / self.props.thickness, self.props.poisson)
     }
+
+    /// The smaller of the warp and weft bending rigidities (the sheet's own, not E h³/12).
+    fn bending_rigidity(&self, _h: f64) -> f64 {
+        self.props.warp_bending.min(self.props.weft_bending)
+    }
 }
 
 #[cfg(test)]

@@ -63,6 +63,12 @@ pub trait ShellMaterial: Send + Sync + std::fmt::Debug {
     fn response(&self, strain: &Voigt5) -> Result<PointResponse, MaterialFailure>;
     /// Small-strain Young's modulus and Poisson ratio (for penalty scaling and reporting).
     fn small_strain_moduli(&self) -> (f64, f64);
+    /// Smallest small-strain bending rigidity (N·m) of a sheet of thickness `h`: E h³/12(1 − ν²)
+    /// for an isotropic lamina; fabrics report their own.
+    fn bending_rigidity(&self, h: f64) -> f64 {
+        let (e, nu) = self.small_strain_moduli();
+        e * h.powi(3) / (12.0 * (1.0 - nu * nu))
+    }
     /// Response at the section's thickness coordinate ζ ∈ [−1, 1]; materials whose
     /// stiffness varies through the thickness (the fabric's bending split) override it.
     fn response_at(&self, strain: &Voigt5, zeta: f64) -> Result<PointResponse, MaterialFailure> {

@@ -12,8 +12,9 @@ use nalgebra::Vector3;
 use std::collections::BTreeMap;
 use std::f64::consts::{FRAC_PI_2, TAU};
 
-/// Largest node count a generator will allocate.
-const MAX_NODES: usize = 100_000_000;
+/// Largest node count a generator will allocate (about 2 GB of mesh); the scene's memory
+/// budget (`crate::budget`) usually refuses far smaller models first.
+pub const MAX_NODES: usize = 20_000_000;
 
 /// Relative tolerance for recognising an angular span of a full turn.
 const FULL_TURN_TOL: f64 = 1e-9;
@@ -81,10 +82,15 @@ struct Grid {
 
 impl Grid {
     fn new(nu: usize, nv: usize, periodic: bool) -> Result<Self, MeshError> {
-        let cols = if periodic { nv } else { nv + 1 };
-        let nodes = (nu.checked_add(1)).and_then(|r| r.checked_mul(cols));
-        match nodes {
-            Some(n) if n <= MAX_NODES => Ok(Grid { nu, nv, periodic }),
+        let cols = if periodic { Some(nv) } else { nv.checked_add(1) };
+        let nodes = nu.checked_add(1).zip(cols).and_then(|(r, c)| r.checked_mul(c));
+        let elements = nu.checked_mul(nv);
+        match (nodes, elements) {
+            (Some(n), Some(_)) if n <= MAX_NODES => {
+                // Positions, directors and quads: about 80 bytes per node.
+                crate::budget::check_alloc(&format!("a {nu} x {nv} element grid"), n as u64, 80).map_err(MeshError::Invalid)?;
+                Ok(Grid { nu, nv, periodic })
+            }
             _ => Err(MeshError::Invalid(format!(
                 "a {nu} x {nv} element grid is too large (limit {MAX_NODES} nodes)"
             ))),
@@ -416,10 +422,19 @@ pub fn focused_rings(ri: f64, ro: f64, ntheta: usize, focus: f64, refine: f64, i
         let cap = if r < focus { inner_aspect * w * r } else { w * r };
         cap.min(w * focus / refine + 0.25 * (r - focus).abs())
     };
+    // Every step is at least w·focus/refine > 0, so the march ends; a ring count that would
+    // make more than MAX_NODES nodes is refused as soon as it is reached.
+    let max_rings = MAX_NODES / ntheta;
     let mut radii = vec![ri];
     let mut r = ri;
     while r < ro {
-        r += step(r);
+        let dr = step(r);
+        if !(dr > 0.0 && dr.is_finite()) || radii.len() >= max_rings {
+            return Err(MeshError::Invalid(format!(
+                "focused_rings: more than {max_rings} rings of {ntheta} sectors would exceed {MAX_NODES} nodes; use fewer sectors (ntheta) or a smaller refine"
+            )));
+        }
+        r += dr;
         radii.push(r);
     }
     // Snap the last ring to ro: drop it if it overshoots by more than half a step, then

@@ -243,6 +243,9 @@ pub fn from_obj(text: &str) -> Result<ShellMesh, MeshError> {
 /// Reads and parses an OBJ file with [`from_obj`]; read failures are
 /// [`MeshError::Io`] naming the path.
 pub fn read_obj(path: &Path) -> Result<ShellMesh, MeshError> {
+    // The text and its parsed mesh: about four times the file's size, within the budget.
+    let len = std::fs::metadata(path).map_err(|e| MeshError::Io(format!("cannot read {}: {e}", path.display())))?.len();
+    crate::budget::check_alloc(&format!("reading the OBJ file {} ({len} bytes)", path.display()), len, 4).map_err(MeshError::Io)?;
     let text = std::fs::read_to_string(path)
         .map_err(|e| MeshError::Io(format!("cannot read {}: {e}", path.display())))?;
     from_obj(&text)

@@ -535,6 +535,25 @@ impl Model {
         self.dofs.fold(out);
     }
 
+    /// Potential of the applied loads at load scales `scales`: −Σ s f·u over the dead forces
+    /// (every node, tied slaves included: their displacement follows the ties, so the
+    /// gradient is the folded force). None when a pattern applies moments (moments about
+    /// fixed axes acting on finite director rotations are not conservative in general).
+    pub fn load_potential(&self, state: &State, scales: &[f64]) -> Option<f64> {
+        let mut w = 0.0;
+        for (load, &s) in self.loads.iter().zip(scales) {
+            if s == 0.0 {
+                continue;
+            }
+            match &load.kind {
+                LoadKind::Forces(list) => w += s * list.iter().map(|(n, f)| f.dot(&state.u[*n])).sum::<f64>(),
+                LoadKind::Moments(_) => return None,
+                LoadKind::Displacements(_) => {}
+            }
+        }
+        Some(-w)
+    }
+
     /// Sets prescribed translations to their values at load scales `scales`.
     pub fn apply_prescribed(&self, state: &mut State, scales: &[f64]) {
         for (load, &s) in self.loads.iter().zip(scales) {

@@ -53,6 +53,17 @@ pub struct BuiltScene {
     pub interply: Option<crate::contact::interply::InterplySetup>,
 }
 
+/// Most increments of one step (each reported and possibly written as a VTU).
+pub const MAX_INCREMENTS: usize = 1_000_000;
+/// Most Newton iterations per increment.
+pub const MAX_ITERATIONS: usize = 10_000;
+/// Most cut-backs (halvings) of an increment.
+pub const MAX_CUTBACKS: usize = 60;
+/// Most solver threads.
+pub const MAX_THREADS: usize = 1024;
+/// Most modes of a buckling step (each a vector of all DOFs, plus the Lanczos basis).
+pub const MAX_BUCKLING_MODES: usize = 100;
+
 fn v3(a: [f64; 3]) -> Vector3<f64> {
     Vector3::new(a[0], a[1], a[2])
 }
@@ -64,6 +75,7 @@ fn positive(x: f64) -> bool {
 /// Builds the model of `scene`, whose text `text` came from `file` (for error positions;
 /// OBJ paths are relative to the file's directory).
 pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneError> {
+    let text = super::strip_bom(text);
     let loc = Locator::new(file, text);
     let base_dir = Path::new(file).parent().unwrap_or(Path::new("."));
 
@@ -113,6 +125,8 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
     let mut parts = Vec::new();
     let mut meshes: Vec<ShellMesh> = Vec::new();
     let mut quality = Vec::new();
+    // Nodes and elements planned so far, for the memory budget.
+    let mut planned: (u64, u64) = (0, 0);
     for (pi, p) in scene.parts.iter().enumerate() {
         let field = format!("parts[{}]", p.name);
         if scene.parts[..pi].iter().any(|q| q.name == p.name) {
@@ -150,6 +164,20 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
         }
         // Materials with a through-thickness law (fabric) fix their own rule.
         let thickness_points = material.thickness_points().unwrap_or(p.thickness_points);
+        // The resource budget, before the mesh is allocated: this part and those before it.
+        let (counts, keys) = mesh_counts(&p.mesh);
+        let fits = counts
+            .and_then(|(n, e)| Some((planned.0.checked_add(n)?, planned.1.checked_add(e)?)))
+            .ok_or_else(|| "more nodes than can be numbered".to_string())
+            .and_then(|(n, e)| crate::budget::check_model(n, e).map(|_| (n, e)));
+        planned = fits.map_err(|msg| loc.at(Some(&p.name), Some("mesh"), format!("{field}.mesh"), format!("{keys}: {msg}")))?;
+        for (key, v) in [("offset", p.offset), ("grain", p.grain)] {
+            if let Some(v) = v
+                && v.iter().any(|x| !x.is_finite())
+            {
+                return Err(loc.at(Some(&p.name), Some(key), format!("{field}.{key}"), format!("expected finite numbers, found {v:?}")));
+            }
+        }
         let mut m = make_mesh(&p.mesh, base_dir).map_err(|e| loc.at(Some(&p.name), Some("mesh"), format!("{field}.mesh"), e.to_string()))?;
         if let Some(o) = p.offset {
             m.nodes.iter_mut().for_each(|x| *x += v3(o));
@@ -180,7 +208,34 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
     // Garment plies as further parts.
     let material_names: std::collections::BTreeSet<String> = materials.keys().map(|k| k.to_string()).collect();
     let garment = match &scene.garment {
-        Some(g) => Some((g, crate::garment::GarmentMesh::build(g, &loc, &material_names)?)),
+        Some(g) => {
+            // A ply of a fabric with its own thickness must have that thickness (as a part must).
+            for (name, ply) in &g.plies {
+                if let Some(t) = materials.get(ply.material.as_str()).and_then(|m| m.intrinsic_thickness())
+                    && (ply.thickness - t).abs() > 1e-9 * t
+                {
+                    return Err(loc.at(Some(name), Some("thickness"), format!("garment.plies[{name}].thickness"), format!(
+                        "ply \"{name}\": material \"{}\" is a sheet of thickness {t} (its stiffness and bending rigidity are for that thickness); the ply's thickness must equal it, found {}",
+                        ply.material, ply.thickness
+                    )));
+                }
+            }
+            // The budget before meshing: an upper estimate of each panel's nodes, times its plies.
+            let (mut n, mut e) = planned;
+            for p in &g.panels {
+                if p.outline.iter().flatten().any(|v| !(v.abs() <= crate::garment::graph::MAX_COORDINATE)) {
+                    continue; // the garment's validation names the vertex
+                }
+                let est = crate::garment::mesh::estimate_nodes(&p.outline, g.element_size) * p.plies.len().max(1) as f64;
+                let fits = if est < 1e15 { n.checked_add(est as u64).zip(e.checked_add(est as u64)) } else { None };
+                let msg = match fits {
+                    Some((n2, e2)) => crate::budget::check_model(n2, e2).map(|_| (n2, e2)),
+                    None => Err(format!("about {est:.2e} nodes, beyond any memory")),
+                };
+                (n, e) = msg.map_err(|m| loc.at(None, Some("element_size"), "garment.element_size", format!("panel \"{}\" at this element size: {m}", p.name)))?;
+            }
+            Some((g, crate::garment::GarmentMesh::build(g, &loc, &material_names)?))
+        }
         None => None,
     };
     let mut garment_first_node = Vec::new();
@@ -208,6 +263,8 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
         }
     }
     let n_nodes = x0.len();
+    // The exact sizes (OBJ meshes and focused rings are known only now).
+    crate::budget::check_model(n_nodes as u64, elements.len() as u64).map_err(|m| loc.at(None, Some("parts"), "parts", m))?;
     let part_index = |name: &str| parts.iter().position(|p: &PartInfo| p.name == name);
 
     // Node sets.
@@ -227,6 +284,15 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
                 None => Ok((0..meshes.len()).collect()),
             }
         };
+        let numbers: Vec<(&str, Vec<f64>)> = match sel {
+            Selector::Box { min, max, .. } => vec![("min", min.to_vec()), ("max", max.to_vec())],
+            Selector::Plane { point, normal, tol, .. } => vec![("point", point.to_vec()), ("normal", normal.to_vec()), ("tol", vec![*tol])],
+            Selector::Nearest { point, .. } => vec![("point", point.to_vec())],
+            Selector::Edge { .. } | Selector::Part { .. } => Vec::new(),
+        };
+        if let Some((key, v)) = numbers.iter().find(|(_, v)| v.iter().any(|x| !x.is_finite())) {
+            return Err(loc.at(Some(name), Some(key), format!("{field}.{key}"), format!("expected finite numbers, found {v:?}")));
+        }
         let mut nodes = Vec::new();
         match sel {
             Selector::Box { min, max, part } => {
@@ -349,6 +415,19 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
                 loc.at_value(name, part, format!("{field}.part"), format!("unknown part \"{part}\"; parts: {}", known.join(", ")))
             })
         };
+        let numbers: (&str, Vec<f64>) = match spec {
+            LoadSpec::NodalForce { force: v, .. } | LoadSpec::TotalForce { force: v, .. } => ("force", v.to_vec()),
+            LoadSpec::NodalMoment { moment: v, .. } => ("moment", v.to_vec()),
+            LoadSpec::EdgeMoment { moment_per_length: v, .. } => ("moment_per_length", v.to_vec()),
+            LoadSpec::EdgeForce { force_per_length: v, .. } => ("force_per_length", v.to_vec()),
+            LoadSpec::SurfaceTraction { traction: v, .. } => ("traction", v.to_vec()),
+            LoadSpec::Gravity { g: v, .. } | LoadSpec::SelfWeight { g: v, .. } => ("g", v.to_vec()),
+            LoadSpec::Displacement { value, .. } => ("value", vec![*value]),
+            LoadSpec::Closure => ("", Vec::new()),
+        };
+        if numbers.1.iter().any(|v| !v.is_finite()) {
+            return Err(loc.at(Some(name), Some(numbers.0), format!("{field}.{}", numbers.0), format!("expected finite numbers, found {:?}", numbers.1)));
+        }
         let kind = match spec {
             LoadSpec::NodalForce { set, force } => LoadKind::Forces(set_of(set)?.iter().map(|&n| (n, v3(*force))).collect()),
             LoadSpec::TotalForce { set, force } => {
@@ -403,6 +482,25 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
         loads.push(Load { name: name.clone(), kind });
     }
 
+    // Solver controls: bounded loops and thread counts.
+    let sv = &scene.solver;
+    let bad_solver = |key: &str, msg: String| loc.at(None, Some(key), format!("solver.{key}"), msg);
+    if !(1..=MAX_ITERATIONS).contains(&sv.max_iterations) {
+        return Err(bad_solver("max_iterations", format!("expected 1 to {MAX_ITERATIONS} Newton iterations per increment, found {}", sv.max_iterations)));
+    }
+    if !(sv.residual_tol.is_finite() && sv.residual_tol > 0.0 && sv.residual_tol < 1.0) {
+        return Err(bad_solver("residual_tol", format!("expected a relative tolerance in (0, 1), found {}", sv.residual_tol)));
+    }
+    if !(sv.energy_tol.is_finite() && sv.energy_tol > 0.0 && sv.energy_tol < 1.0) {
+        return Err(bad_solver("energy_tol", format!("expected a relative tolerance in (0, 1), found {}", sv.energy_tol)));
+    }
+    if sv.max_cutbacks > MAX_CUTBACKS {
+        return Err(bad_solver("max_cutbacks", format!("expected at most {MAX_CUTBACKS} halvings (2^-{MAX_CUTBACKS} of an increment is below rounding), found {}", sv.max_cutbacks)));
+    }
+    if sv.threads > MAX_THREADS {
+        return Err(bad_solver("threads", format!("expected 0 (all cores) to {MAX_THREADS} threads, found {}", sv.threads)));
+    }
+
     // Steps.
     if scene.steps.is_empty() {
         return Err(loc.at(None, Some("steps"), "steps", "expected at least one step"));
@@ -411,14 +509,20 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
     let mut current = vec![0.0; loads.len()];
     for (si, s) in scene.steps.iter().enumerate() {
         let field = format!("steps[{}]", s.name);
-        if s.increments == 0 {
-            return Err(loc.at(Some(&s.name), Some("increments"), format!("{field}.increments"), "expected at least one increment"));
+        if s.increments == 0 || s.increments > MAX_INCREMENTS {
+            return Err(loc.at(Some(&s.name), Some("increments"), format!("{field}.increments"), format!("expected 1 to {MAX_INCREMENTS} increments, found {}", s.increments)));
+        }
+        if let crate::solver::StepKind::Buckling { modes, .. } = &s.kind
+            && *modes > MAX_BUCKLING_MODES
+        {
+            return Err(loc.at(Some(&s.name), Some("modes"), format!("{field}.kind.modes"), format!("expected 1 to {MAX_BUCKLING_MODES} buckling modes, found {modes}")));
         }
         if let crate::solver::StepKind::Dynamic(ds) = &s.kind {
             if let Some((key, msg)) = crate::solver::dynamics::check_settings(ds) {
                 return Err(loc.at(Some(&s.name), Some(key), format!("{field}.kind.{key}"), msg));
             }
         }
+        let previous = current.clone();
         for (lname, &v) in &s.scale {
             let Some(i) = loads.iter().position(|l| &l.name == lname) else {
                 let known: Vec<&str> = loads.iter().map(|l| l.name.as_str()).collect();
@@ -431,12 +535,23 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
         }
         let _ = si;
         let kind = super::path::resolve_step_kind(s, &field, &loc, &node_sets, &loads, &fixed)?;
-        steps.push(StepPlan { name: s.name.clone(), increments: s.increments, linear: s.linear, target_scales: current.clone(), kind });
+        // What the solver would refuse only when it reaches the step: a buckling or
+        // arc-length step without a load change.
+        if matches!(kind, crate::solver::StepKind::Buckling { .. } | crate::solver::StepKind::ArcLength { .. }) && current == previous {
+            return Err(loc.at(Some(&s.name), Some("scale"), format!("{field}.scale"), "the step changes no load: give the reference load's target scale in its scale table"));
+        }
+        steps.push(StepPlan { name: s.name.clone(), increments: s.increments, linear: s.linear, automatic_increments: s.automatic_increments, target_scales: current.clone(), kind });
     }
 
     // Monitors.
     let mut monitors = Vec::new();
     for m in &scene.monitors {
+        if m.point.iter().any(|x| !x.is_finite()) {
+            return Err(loc.at(Some(&m.name), Some("point"), format!("monitors[{}].point", m.name), format!("expected finite numbers, found {:?}", m.point)));
+        }
+        if m.dofs.is_empty() {
+            return Err(loc.at(Some(&m.name), Some("dofs"), format!("monitors[{}].dofs", m.name), "expected at least one quantity to record (Ux, Uy, Uz or Umag)"));
+        }
         let candidates: Vec<usize> = match (&m.part, &m.set) {
             (_, Some(set)) => get_set(set, &m.name, format!("monitors[{}].set", m.name))?.clone(),
             (Some(pn), None) => {
@@ -465,6 +580,17 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
         if !ok(d.disc_radius) || !ok(d.specimen_radius) || d.disc_radius >= d.specimen_radius || d.resolution.is_some_and(|r| !ok(r)) {
             return Err(loc.at(None, Some("drape"), "drape", "expected 0 < disc_radius < specimen_radius and a positive resolution"));
         }
+        if d.center.iter().any(|x| !x.is_finite()) {
+            return Err(loc.at(None, Some("center"), "drape.center", format!("expected finite numbers, found {:?}", d.center)));
+        }
+        // The specimen must be the mesh: its outermost node at specimen_radius from the centre.
+        let outer = x0.iter().map(|x| (x.x - d.center[0]).hypot(x.y - d.center[1])).fold(0.0, f64::max);
+        if (outer - d.specimen_radius).abs() > 0.01 * d.specimen_radius {
+            return Err(loc.at(None, Some("specimen_radius"), "drape.specimen_radius", format!(
+                "the specimen radius is {} but the mesh's outermost node lies {outer:.6} from the drape centre",
+                d.specimen_radius
+            )));
+        }
     }
     let imperfection = scene.imperfection.as_ref().map(|imp| super::path::resolve_imperfection(imp, &loc, &loads)).transpose()?;
     let (mut ties, mut seams) = crate::garment::build_scene_seams(&scene.seams, &loc, &node_sets, &loads, &x0, &mut frames0)?;
@@ -479,8 +605,13 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
             .parts
             .iter()
             .zip(&garment_first_node)
-            .map(|(p, &f)| fixed[NODE_DOFS * f..NODE_DOFS * (f + p.mesh.nodes.len())].iter().any(|&x| x))
+            .map(|(p, &f)| {
+                // Carried by a support, or by contact with the rigid bodies.
+                let on_bodies = scene.contact.as_ref().is_some_and(|c| !c.bodies.is_empty() && (c.parts.is_empty() || c.parts.contains(&p.name)));
+                on_bodies || fixed[NODE_DOFS * f..NODE_DOFS * (f + p.mesh.nodes.len())].iter().any(|&x| x)
+            })
             .collect();
+        warnings.extend(gm.crossed_seams(g, &loc).into_iter().map(|e| e.to_string()));
         warnings.extend(gm.unsupported(g, &loc, &supported).into_iter().map(|e| e.to_string()));
     }
     let interply = match &garment {
@@ -489,6 +620,28 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
     };
     crate::garment::apply_tapes(&seams, &x0, &mut elements, &mut sections);
     let dofs = DofMap::with_ties(&fixed, ties).map_err(|e| loc.at(None, Some("seams"), "seams", e))?;
+    if dofs.n_free == 0 {
+        return Err(loc.at(None, Some("boundary"), "boundary", "every DOF is supported, prescribed or tied: there is nothing to solve"));
+    }
+    for s in &steps {
+        if let crate::solver::StepKind::DisplacementControl { global_dof, set, .. } = &s.kind
+            && dofs.eq.get(*global_dof).is_none_or(|&e| e == crate::model::FIXED)
+        {
+            return Err(loc.at_value(&s.name, set, format!("steps[{}].kind.set", s.name), "the controlled DOF is tied by a seam or stitch line (it has no equation of its own); control a master node"));
+        }
+    }
+    if let Some(pname) = &scene.output.plot_against {
+        match loads.iter().position(|l| &l.name == pname) {
+            None => {
+                let known: Vec<&str> = loads.iter().map(|l| l.name.as_str()).collect();
+                return Err(loc.at(None, Some("plot_against"), "output.plot_against", format!("no load named \"{pname}\"; loads: {}", known.join(", "))));
+            }
+            Some(i) if steps.iter().all(|s| s.target_scales[i] == 0.0) => {
+                return Err(loc.at(None, Some("plot_against"), "output.plot_against", format!("no step scales the load \"{pname}\": the monitor plot would have no x range")));
+            }
+            Some(_) => {}
+        }
+    }
     let model = Model { x0, frames0, elements, sections, parts, dofs, loads };
     Ok(BuiltScene { model, steps, monitors, node_sets, quality, imperfection, seams, warnings, garment: layout, contact, interply })
 }
@@ -501,6 +654,28 @@ fn check_young_poisson(young: f64, poisson: f64, bad: &dyn Fn(&str, &str) -> Sce
         return Err(bad("poisson", "expected a Poisson ratio in (-1, 0.5)"));
     }
     Ok(())
+}
+
+/// Nodes and elements a generated mesh will have (None on overflow), and the fields that set
+/// them. OBJ meshes count as nothing here (their size is bounded by the file's) and a focused
+/// annulus by its two bounding rings (the ring march bounds itself).
+fn mesh_counts(spec: &MeshSpec) -> (Option<(u64, u64)>, &'static str) {
+    let grid = |a: usize, b: usize, periodic: bool| {
+        let (a, b) = (a as u64, b as u64);
+        let cols = if periodic { Some(b) } else { b.checked_add(1) };
+        Some((a.checked_add(1)?.checked_mul(cols?)?, a.checked_mul(b)?))
+    };
+    match *spec {
+        MeshSpec::Rectangle { nx, ny, .. } => (grid(nx, ny, false), "nx × ny"),
+        MeshSpec::CylindricalPanel { n_axial, n_circ, .. } => (grid(n_axial, n_circ, false), "n_axial × n_circ"),
+        MeshSpec::Hemisphere { n_merid, n_circ, .. } => (grid(n_merid, n_circ, false), "n_merid × n_circ"),
+        MeshSpec::SlitAnnulus { nr, ntheta, .. } => (grid(nr, ntheta, false), "nr × ntheta"),
+        MeshSpec::TwistedStrip { nx, ny, .. } => (grid(nx, ny, false), "nx × ny"),
+        MeshSpec::Annulus { nr, ntheta, .. } => (grid(nr, ntheta, true), "nr × ntheta"),
+        MeshSpec::AnnulusRings { ref radii, ntheta } => (grid(radii.len().saturating_sub(1), ntheta, true), "radii × ntheta"),
+        MeshSpec::FocusedAnnulus { ntheta, .. } => (grid(1, ntheta, true), "ntheta"),
+        MeshSpec::Obj { .. } => (Some((0, 0)), "the OBJ file"),
+    }
 }
 
 fn make_mesh(spec: &MeshSpec, base_dir: &Path) -> Result<ShellMesh, mesh::MeshError> {

@@ -122,6 +122,30 @@ pub struct ContactSpec {
     /// Viscous pseudo-time stabilization coefficient c (N/m³): force c·a·(u − u_prev).
     #[serde(default)]
     pub stabilization: Option<f64>,
+    /// Normal contact formulation.
+    #[serde(default)]
+    pub formulation: ContactFormulation,
+}
+
+/// How normal contact with the bodies is enforced.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+pub enum ContactFormulation {
+    /// Penalty with one Uzawa update per converged increment (`contact::mechanics`).
+    #[default]
+    AugmentedLagrangian,
+    /// Smooth log barrier with continuous collision detection (`contact::barrier`):
+    /// intersection-free at every iterate.
+    Barrier {
+        /// Barrier thickness d̂ as a multiple of the shell thickness.
+        #[serde(default = "one")]
+        distance_factor: f64,
+        /// Factor on the automatic barrier stiffness.
+        #[serde(default = "one")]
+        stiffness_factor: f64,
+        /// Friction stick regularisation δ as a multiple of d̂.
+        #[serde(default = "one")]
+        friction_slip: f64,
+    },
 }
 
 fn one() -> f64 {
@@ -411,6 +435,11 @@ pub struct StepSpec {
     /// iterations; for small-displacement reference problems.
     #[serde(default)]
     pub linear: bool,
+    /// Static steps: `increments` is only the first guess; increments grow after quick
+    /// convergence and shrink after slow or failed ones (divergence detected early), results
+    /// at every converged increment. Default false: exactly `increments` equal load levels.
+    #[serde(default)]
+    pub automatic_increments: bool,
     /// Scale of each load pattern at the end of the step; unnamed patterns keep the value
     /// they had at the end of the previous step.
     #[serde(default)]

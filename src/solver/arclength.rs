@@ -205,6 +205,7 @@ impl<'m> Solver<'m> {
             step: si,
             step_name: step.name.clone(),
             last_converged_time: time,
+            simulated_time: None,
             iteration,
             residuals,
             worst_element,

@@ -11,16 +11,9 @@ use std::time::Instant;
 
 use super::linear::FactorKind;
 use super::newton::{failed, Attempt, Solver};
-use crate::element::NODE_DOFS;
 use crate::model::State;
 
 impl<'m> Solver<'m> {
-    /// Potential energy Π = U − Σ f_ext·u over the translations (dead forces).
-    fn potential(&self, state: &State, strain_energy: f64) -> f64 {
-        let work: f64 = (0..self.model.n_nodes()).map(|n| (0..3).map(|c| self.f_ext[NODE_DOFS * n + c] * state.u[n][c]).sum::<f64>()).sum();
-        strain_energy - work
-    }
-
     /// Damped Newton iterations for one increment ending at `scales` (the `StaticDamped`
     /// step kind); same convergence tests as the plain Newton `attempt`.
     pub(super) fn attempt_damped(&mut self, state: &mut State, scales: &[f64], progress: &mut dyn FnMut(usize, f64)) -> Attempt {
@@ -94,13 +87,13 @@ impl<'m> Solver<'m> {
             // Trust-region test on the trial state.
             let base = state.clone();
             let (base_f_int, base_f_ext) = (self.f_int.clone(), self.f_ext.clone());
-            let (pi0, rel0) = (self.potential(state, energy), rel);
+            let (pi0, rel0) = (self.potential(state, scales, energy).unwrap_or(f64::NAN), rel);
             self.model.update(state, &du, 1.0);
             let trial = self.assemble(state, scales, true);
             let accept = match &trial {
                 Ok(e) => {
                     let (rel1, _) = self.residual(&mut r);
-                    rel1.is_finite() && (self.potential(state, *e) < pi0 || rel1 < rel0)
+                    rel1.is_finite() && (self.potential(state, scales, *e).unwrap_or(f64::NAN) < pi0 || rel1 < rel0)
                 }
                 Err(_) => false,
             };

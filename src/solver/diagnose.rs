@@ -57,6 +57,59 @@ pub fn unsupported_directions(model: &Model) -> Vec<&'static str> {
         .collect()
 }
 
+/// Standard gravity (m/s²), the weight scale of the bending length.
+const STANDARD_GRAVITY: f64 = 9.80665;
+
+/// Bending length ℓ_b = (B / ρ_A g)^{1/3} of element `e`'s section (the length over which a
+/// sheet under its own weight bends, the size of its folds; Peirce 1930) and the element's
+/// size √A, when the part has mass.
+pub fn bending_length(model: &Model, e: usize) -> Option<(f64, f64)> {
+    let def = model.elements.get(e)?;
+    let rho = model.parts.get(def.part)?.areal_density;
+    if rho <= 0.0 {
+        return None;
+    }
+    let sec = &model.sections[def.section];
+    let b = sec.material.bending_rigidity(sec.thickness);
+    let lb = (b / (rho * STANDARD_GRAVITY)).cbrt();
+    let size = model.element(e).reference_area().sqrt();
+    (lb.is_finite() && size.is_finite()).then_some((lb, size))
+}
+
+/// The failure of a `Dynamic` step whose time step collapsed at element `element`: the
+/// cause, the element's distortion, and what to change. No mechanism verdict (mass
+/// regularises a free body); when the element is larger than the fabric's bending length,
+/// folds form inside single elements (neighbouring directors turn past what one element can
+/// represent) and the mesh must be refined.
+pub fn explain_dynamic(model: &Model, state: &State, cause: &str, element: Option<usize>) -> String {
+    let mut s = cause.to_string();
+    if let Some((e, r)) = worst_distortion(model, state) {
+        if r.is_finite() {
+            s.push_str(&format!("; most distorted element {e} (corner Jacobian ratio {r:.3})"));
+        } else {
+            s.push_str(&format!("; element {e} is folded through itself (corner Jacobian ratio not positive)"));
+        }
+    }
+    let coarse = element.and_then(|e| bending_length(model, e).map(|(lb, size)| (e, lb, size))).filter(|&(_, lb, size)| size > lb);
+    match coarse {
+        Some((e, lb, size)) => s.push_str(&format!(
+            "; likely cause: element {e} ({:.1} mm) is larger than the fabric's bending length (B/ρ_A g)^(1/3) = {:.1} mm, so a fold forms inside one element; refine the mesh to about {:.1} mm or less",
+            size * 1e3,
+            lb * 1e3,
+            0.5 * lb * 1e3
+        )),
+        None => s.push_str(&format!(
+            "; likely cause: {}",
+            if cause.contains("failed:") {
+                "an element cannot follow the motion (inversion or a fold sharper than the mesh resolves); refine the mesh there, add mass_damping, or lower dt_max"
+            } else {
+                "the motion is too violent for the time step (an impact or a snap); add mass_damping or lower dt_max"
+            }
+        )),
+    }
+    s
+}
+
 /// The failure message extended with the most distorted element of `state` and the
 /// likely cause (a mechanism when a direction has no support at all).
 pub fn explain(model: &Model, state: &State, cause: &str, indefinite: bool) -> String {

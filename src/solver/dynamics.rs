@@ -60,6 +60,14 @@ use crate::model::{Model, State, FIXED, UNTIED};
 /// contact constraint limit, `contact::mechanics`).
 const MAX_SADDLE_ESCAPES: usize = 10;
 
+/// Successive time-step failures at the same element after which a Dynamic step stops with a
+/// diagnosis instead of cutting Δt further (each cut quarters it).
+const FAILURE_STREAK: usize = 6;
+
+/// Inexact time steps on the way to rest: the last Newton correction may move nodes by this
+/// fraction of the step's largest nodal motion (see `time_step`).
+const INEXACT_MOTION: f64 = 1e-3;
+
 /// Controls of a `Dynamic` step (SI units or any consistent set; times in the model's
 /// time unit).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -99,6 +107,11 @@ pub struct DynamicSettings {
     /// Transient analysis: when > 0 the step ends (successfully) at this time instead of
     /// waiting for rest.
     pub duration: f64,
+    /// Solve each backward-Euler step as the minimisation of its incremental potential
+    /// (energy line search, PSD-projected element Hessians where the tangent is indefinite,
+    /// inexact steps away from rest; see `time_step`). Default: on with barrier contact,
+    /// otherwise off (the safeguarded Newton update).
+    pub incremental_potential: Option<bool>,
 }
 
 /// Implicit time integration schemes.
@@ -193,6 +206,7 @@ impl Default for DynamicSettings {
             require_stable: true,
             scheme: TimeScheme::BackwardEuler,
             duration: 0.0,
+            incremental_potential: None,
         }
     }
 }
@@ -394,8 +408,31 @@ impl<'m> Solver<'m> {
         norm2.sqrt()
     }
 
-    /// Newton iterations for one backward-Euler step of size `dt` from `prev` at load
-    /// scales `scales`; `state` enters as the predictor and leaves as the solution.
+    /// Inertia and damping potential of a backward-Euler step (the kinetic part of the
+    /// incremental potential, Li et al. 2020 eq. 3, with mass damping):
+    /// Σ m (½|Δu − Δt v_n|²/Δt² + ½ α_M |Δu|²/Δt) + J (same for the director d), Δu = u − u_n;
+    /// its gradient is the inertia force of [`Solver::add_inertia`].
+    fn inertia_potential(&self, state: &State, prev: &Kinematics, mass: &LumpedMass, co: &Coefficients) -> f64 {
+        let (dt, a) = (co.dt, co.damping);
+        let term = |dx: Vector3<f64>, v: Vector3<f64>| 0.5 * (dx - v * dt).norm_squared() / (dt * dt) + 0.5 * a * dx.norm_squared() / dt;
+        (0..self.model.n_nodes())
+            .map(|n| {
+                mass.translational[n] * term(state.u[n] - prev.state.u[n], prev.v[n])
+                    + mass.rotary[n] * term(state.frames[n].d - prev.state.frames[n].d, prev.w[n])
+            })
+            .sum()
+    }
+
+    /// One time step of size `dt` from `prev` at load scales `scales`; `state` enters as the
+    /// predictor and leaves as the solution.
+    ///
+    /// Backward Euler with conservative loads and nodal forces is solved as the minimisation
+    /// of the incremental potential E(x) = inertia potential + Π(x) (Li et al. 2020, §3):
+    /// Newton directions from the exact tangent K + c M while it is positive definite,
+    /// otherwise (for the rest of the step) from the tangent with every element's Hessian
+    /// projected onto the PSD cone (always a descent direction), each filtered by the
+    /// collision-free bound of the contact terms and an Armijo energy line search. Other
+    /// schemes (generalized-α) and non-conservative terms take the safeguarded Newton update.
     #[allow(clippy::too_many_arguments)]
     fn time_step(
         &mut self,
@@ -414,6 +451,11 @@ impl<'m> Solver<'m> {
         let mut energy0: Option<f64> = None;
         let mut static_r = vec![0.0; n];
         let co = Coefficients::new(&ds.scheme, dt, ds.mass_damping);
+        let wanted = ds.incremental_potential.unwrap_or_else(|| self.nodal_forces.iter().any(|c| c.is_barrier()));
+        let incremental_potential = wanted && matches!(ds.scheme, TimeScheme::BackwardEuler);
+        let to_rest = incremental_potential && ds.duration == 0.0;
+        let mut last_correction = f64::INFINITY;
+        self.assembler.project = false;
         self.model.apply_prescribed(state, scales);
         let mut energy = match self.assemble(state, scales, true) {
             Ok(e) => e,
@@ -434,7 +476,15 @@ impl<'m> Solver<'m> {
             }
             if it > 0 {
                 let de = du.iter().zip(&r).map(|(a, b)| a * b).sum::<f64>().abs();
-                if self.converged(rel, de, energy0.unwrap_or(1.0)) {
+                // Pseudo-transient steps away from rest need not be solved to round-off
+                // (Kelley & Keyes 1998 allow inexact steps): accept when the last correction
+                // moved no node by more than 10⁻³ of this step's largest motion (a velocity
+                // error of 0.1 %) and the residual is below 10⁻². Near rest the step's motion
+                // vanishes and the test becomes the strict one.
+                let motion = (0..self.model.n_nodes()).map(|k| (state.u[k] - prev.state.u[k]).norm()).fold(0.0, f64::max);
+                let inexact_ok = to_rest && rel <= 1e-2 && last_correction <= INEXACT_MOTION * motion;
+                if self.converged(rel, de, energy0.unwrap_or(1.0)) || inexact_ok {
+                    self.assembler.project = false;
                     return TimeStep::Converged { iterations: it, residuals, static_residual: static_rel, energy, static_r };
                 }
             }
@@ -442,34 +492,78 @@ impl<'m> Solver<'m> {
                 break;
             }
             let t = Instant::now();
-            let kind = self.cholesky.factorize(&self.values);
+            let mut kind = self.cholesky.factorize(&self.values);
             self.timings.factorization += t.elapsed().as_secs_f64();
+            let descent = incremental_potential && self.potential(state, scales, energy).is_some();
+            if descent && !matches!(kind, Ok(FactorKind::Llt)) {
+                // Indefinite: project the element Hessians for this iteration's direction.
+                self.assembler.project = true;
+                if let Err(f) = self.assemble(state, scales, true) {
+                    self.assembler.project = false;
+                    return TimeStep::Failed { iteration: it, residuals, worst_element: Some(f.element), cause: f.to_string() };
+                }
+                self.residual(&mut r);
+                self.add_inertia(state, prev, mass, &co, &mut r);
+                let t = Instant::now();
+                kind = self.cholesky.factorize(&self.values);
+                self.timings.factorization += t.elapsed().as_secs_f64();
+            }
+            if self.assembler.project {
+                self.timings.projected_iterations += 1;
+                // The next tangent (assembled at the accepted state) is the exact one again.
+                self.assembler.project = false;
+            }
             match kind {
                 Ok(FactorKind::Llt) => {}
-                Ok(FactorKind::Ldlt) | Err(_) => return TimeStep::Indefinite { iteration: it, residuals },
+                Ok(FactorKind::Ldlt) | Err(_) => {
+                    self.assembler.project = false;
+                    return TimeStep::Indefinite { iteration: it, residuals };
+                }
             }
             let t = Instant::now();
             du.iter_mut().zip(&r).for_each(|(d, r)| *d = -r);
             self.cholesky.solve(&mut du);
             self.timings.solve += t.elapsed().as_secs_f64();
             if du.iter().any(|v| !v.is_finite()) {
+                self.assembler.project = false;
                 return TimeStep::Failed { iteration: it, residuals, worst_element: None, cause: "linear solve produced NaN".into() };
             }
+            let slope = du.iter().zip(&r).map(|(a, b)| a * b).sum::<f64>();
             if energy0.is_none() {
-                energy0 = Some(du.iter().zip(&r).map(|(a, b)| a * b).sum::<f64>().abs().max(1e-300));
+                energy0 = Some(slope.abs().max(1e-300));
             }
-            // Backtracking along the Newton direction keeps the time step.
-            match self.safeguarded_update(state, &du, scales, true) {
-                Ok(e) => energy = e,
-                Err(failure) => {
-                    let (el, cause) = match failure {
-                        Some(f) => (Some(f.element), f.to_string()),
-                        None => (None, "no admissible trial state along the Newton direction (a nodal-force term, e.g. contact with a node through a body, rejected every backtracked step)".into()),
-                    };
+            let before = state.u.clone();
+            let outcome = if descent {
+                let kinetic = self.inertia_potential(state, prev, mass, &co);
+                let load = self.model.load_potential(state, scales).unwrap_or(0.0);
+                let nodal = self.nodal_potential.unwrap_or(0.0);
+                let pi0 = energy + load + nodal + kinetic;
+                let magnitude = energy.abs() + load.abs() + nodal.abs() + kinetic.abs();
+                let searched = self.energy_line_search(state, &du, scales, slope, pi0, magnitude, &mut |s: &Self, st: &State| s.inertia_potential(st, prev, mass, &co));
+                searched.map(|d| {
+                    self.timings.line_search_cuts += d.cuts;
+                    d.energy
+                })
+                .map_err(|(failing, cause)| (failing.or_else(|| self.worst_element(&r)), format!("energy line search failed: {cause}")))
+            } else {
+                // Backtracking along the Newton direction keeps the time step.
+                self.safeguarded_update(state, &du, scales, true).map_err(|failure| match failure {
+                    Some(f) => (Some(f.element), f.to_string()),
+                    None => (None, "no admissible trial state along the Newton direction (a nodal-force term, e.g. contact with a node through a body, rejected every backtracked step)".into()),
+                })
+            };
+            match outcome {
+                Ok(e) => {
+                    energy = e;
+                    last_correction = (0..self.model.n_nodes()).map(|k| (state.u[k] - before[k]).norm()).fold(0.0, f64::max);
+                }
+                Err((el, cause)) => {
+                    self.assembler.project = false;
                     return TimeStep::Failed { iteration: it, residuals, worst_element: el, cause };
                 }
             }
         }
+        self.assembler.project = false;
         let el = self.worst_element(&r);
         TimeStep::Failed {
             iteration: ds.max_iterations,
@@ -728,6 +822,7 @@ impl<'m> Solver<'m> {
             step: si,
             step_name: step.name.clone(),
             last_converged_time: si as f64 + (t / ds.max_time).min(0.999_999),
+            simulated_time: Some(t),
             iteration,
             residuals,
             worst_element,
@@ -790,6 +885,8 @@ impl<'m> Solver<'m> {
         let mut unstable_rests = 0usize;
         let mut saddle_escapes = 0usize;
         let mut indefinite = false;
+        // (element, successive time-step failures at it) since the last accepted step.
+        let mut failure_streak: (Option<usize>, usize) = (None, 0);
         for k in 1..=ds.max_steps {
             let scales = at(t + dt);
             let mut report_progress = |it: usize, res: f64| {
@@ -801,6 +898,7 @@ impl<'m> Solver<'m> {
             let outcome = self.time_step(state, &prev, &mass, dt, ds, &scales, &mut report_progress);
             match outcome {
                 TimeStep::Converged { iterations: its, residuals, static_residual, energy, static_r } => {
+                    failure_streak = (None, 0);
                     iterations += its;
                     self.commit_nodal_forces(state);
                     let co = Coefficients::new(&ds.scheme, dt, ds.mass_damping);
@@ -903,7 +1001,26 @@ impl<'m> Solver<'m> {
                         ));
                     }
                 }
+                TimeStep::Failed { iteration, residuals, worst_element, cause }
+                    if worst_element.is_some() && cause.contains("failed:") && failure_streak.0 == worst_element && failure_streak.1 + 1 >= FAILURE_STREAK =>
+                {
+                    // The same element failed at every one of the last time-step cuts: a
+                    // smaller Δt does not cure it (4⁻⁶ of the Δt it first failed at).
+                    let cause = format!(
+                        "time step {k} at t = {t:.4e}: element {} failed at {FAILURE_STREAK} successive time-step cuts down to Δt = {dt:.3e}: {cause}",
+                        worst_element.unwrap_or(0)
+                    );
+                    let cause = diagnose::explain_dynamic(model, &prev.state, &cause, worst_element);
+                    *state = prev.state.clone();
+                    return Err(error(iteration, residuals, worst_element, cause, t));
+                }
                 TimeStep::Indefinite { .. } | TimeStep::Failed { .. } if dt * 0.25 >= ds.dt_min => {
+                    match &outcome {
+                        TimeStep::Failed { worst_element, cause, .. } if worst_element.is_some() && cause.contains("failed:") => {
+                            failure_streak = if failure_streak.0 == *worst_element { (*worst_element, failure_streak.1 + 1) } else { (*worst_element, 1) };
+                        }
+                        _ => failure_streak = (None, 0),
+                    }
                     indefinite |= matches!(outcome, TimeStep::Indefinite { .. });
                     *state = prev.state.clone();
                     rejected += 1;
@@ -920,7 +1037,7 @@ impl<'m> Solver<'m> {
                 }
                 TimeStep::Failed { iteration, residuals, worst_element, cause } => {
                     let cause = format!("time step {k} at t = {t:.4e}, Δt = {dt:.3e} (below 4 dt_min after cut-backs): {cause}");
-                    let cause = diagnose::explain(model, state, &cause, self.cholesky.kind() == FactorKind::Ldlt);
+                    let cause = diagnose::explain_dynamic(model, &prev.state, &cause, worst_element);
                     *state = prev.state.clone();
                     return Err(error(iteration, residuals, worst_element, cause, t));
                 }

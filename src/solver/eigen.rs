@@ -252,6 +252,7 @@ impl<'m> Solver<'m> {
             step: si,
             step_name: step.name.clone(),
             last_converged_time: si as f64,
+            simulated_time: None,
             iteration: 0,
             residuals: vec![],
             worst_element: None,

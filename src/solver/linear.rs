@@ -65,7 +65,16 @@ impl SparseCholesky {
             SymmetricOrdering::Amd,
             CholeskySymbolicParams::default(),
         )
-        .map_err(|e| LinearError::Symbolic(format!("{e:?}")))?;
+        .map_err(|e| LinearError::Symbolic(format!("{e:?} (analysing {n} equations with {} stored entries)", pattern.row_idx.len())))?;
+        // The factor's size is known now, before its storage is allocated: check it against
+        // the memory budget and allocate fallibly (an abort is never the answer).
+        let len = symbolic.len_val();
+        crate::budget::check_alloc(&format!("the Cholesky factor of {n} equations ({len} entries)"), len as u64, 8).map_err(LinearError::Symbolic)?;
+        let mut l_values = Vec::new();
+        l_values
+            .try_reserve_exact(len)
+            .map_err(|_| LinearError::Symbolic(format!("out of memory for the Cholesky factor of {n} equations ({len} entries)")))?;
+        l_values.resize(len, 0.0);
         let par = if threads > 1 { Par::rayon(threads) } else { Par::Seq };
         let req = StackReq::any_of(&[
             symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default()),
@@ -73,7 +82,6 @@ impl SparseCholesky {
             symbolic.solve_in_place_scratch::<f64>(1, par),
         ]);
         let buffer = MemBuffer::try_new(req).map_err(|_| LinearError::Symbolic("out of memory for workspace".into()))?;
-        let l_values = vec![0.0; symbolic.len_val()];
         Ok(Self { pattern: sym, symbolic, l_values, buffer, kind: FactorKind::Llt, par, factored: None })
     }
 

@@ -27,6 +27,9 @@ pub struct StepPlan {
     pub increments: usize,
     /// One Newton iteration per increment (linear analysis).
     pub linear: bool,
+    /// Static steps: size the increments automatically from a first one of `1/increments`
+    /// ([`Solver::run_automatic`]) instead of solving at the `increments` equal load levels.
+    pub automatic_increments: bool,
     /// Target scale per load pattern at the end of the step (same order as `Model::loads`).
     pub target_scales: Vec<f64>,
     /// How the step is solved (static Newton by default).
@@ -58,6 +61,12 @@ pub struct Timings {
     /// analysed (the forces are exact; Newton is then quasi-Newton).
     #[serde(default)]
     pub dropped_pair_blocks: usize,
+    /// Step halvings of the energy line search (after the collision-free bound).
+    #[serde(default)]
+    pub line_search_cuts: usize,
+    /// Newton iterations whose tangent had its element Hessians projected to PSD.
+    #[serde(default)]
+    pub projected_iterations: usize,
 }
 
 /// A converged nominal increment.
@@ -132,6 +141,8 @@ pub struct SolveError {
     pub step_name: String,
     /// Pseudo-time reached by the last converged state.
     pub last_converged_time: f64,
+    /// Simulated time of the last accepted time step within a `Dynamic` step.
+    pub simulated_time: Option<f64>,
     /// Newton iteration at failure.
     pub iteration: usize,
     /// Relative residual history of the last attempt.
@@ -144,12 +155,16 @@ pub struct SolveError {
 
 impl std::fmt::Display for SolveError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let at = match self.simulated_time {
+            Some(t) => format!("simulated time t = {t:.4e}"),
+            None => format!("time {:.6}", self.last_converged_time),
+        };
         write!(
             f,
-            "step {} '{}' failed after the last converged state at time {:.6}: {} (iteration {}, residual history [{}]",
+            "step {} '{}' failed after the last converged state at {}: {} (iteration {}, residual history [{}]",
             self.step + 1,
             self.step_name,
-            self.last_converged_time,
+            at,
             self.cause,
             self.iteration,
             residual_history(&self.residuals)
@@ -178,6 +193,30 @@ pub(super) fn failed(iteration: usize, residuals: &[f64], worst_element: Option<
     Attempt::Failed { iteration, residuals: residuals.to_vec(), worst_element, cause }
 }
 
+/// Extrapolating predictor of an automatic increment (Crisfield 1991, §9.4; the linear
+/// extrapolation of general-purpose FE codes): `state`, converged at the current load level,
+/// moves on by `ratio` × its change since `old` — translations linearly, each director by
+/// `ratio` × the rotation that took its previous direction to the current one (applied to the
+/// whole frame).
+fn extrapolate(state: &mut State, old: &State, ratio: f64) {
+    if !(ratio.is_finite() && ratio > 0.0) {
+        return;
+    }
+    let ratio = ratio.min(4.0);
+    for n in 0..state.u.len() {
+        let du = state.u[n] - old.u[n];
+        state.u[n] += du * ratio;
+        let (d0, d1) = (old.frames[n].d, state.frames[n].d);
+        let axis = d0.cross(&d1);
+        let s = axis.norm();
+        if s > 1e-14 {
+            let angle = s.atan2(d0.dot(&d1));
+            let r = nalgebra::Rotation3::from_scaled_axis(axis * (angle * ratio / s));
+            state.frames[n] = state.frames[n].rotated(&r);
+        }
+    }
+}
+
 /// A static solver bound to one model.
 pub struct Solver<'m> {
     pub(super) model: &'m Model,
@@ -198,6 +237,26 @@ pub struct Solver<'m> {
     pub(super) extra_reports: Vec<serde_json::Value>,
     /// Node pairs coupled in the pattern for the nodal-force terms' pair blocks.
     pub(super) couplings: Vec<(usize, usize)>,
+    /// Sum of the nodal-force terms' potentials at the last assembly (None: a term is not
+    /// conservative).
+    pub(super) nodal_potential: Option<f64>,
+}
+
+/// Largest director rotation of one Newton update in the energy line search (radians): a
+/// trust region on the director, whose energy is far from quadratic beyond it.
+const MAX_ROTATION: f64 = 0.5;
+
+/// A first Newton correction of an automatic increment turning a director by more than this
+/// (radians) cuts the increment back at once.
+const MAX_FIRST_ROTATION: f64 = 1.0;
+
+/// An accepted step of the energy line search ([`Solver::energy_line_search`]).
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Descent {
+    /// Strain energy at the accepted state.
+    pub energy: f64,
+    /// Halvings of the step (after the collision-free bound).
+    pub cuts: usize,
 }
 
 impl<'m> Solver<'m> {
@@ -222,6 +281,7 @@ impl<'m> Solver<'m> {
             timings,
             extra_reports: Vec::new(),
             couplings: Vec::new(),
+            nodal_potential: Some(0.0),
         })
     }
 
@@ -329,6 +389,7 @@ impl<'m> Solver<'m> {
                 forces.add_coupled(self.model, state, &mut f, &mut jacobian, &mut pairs);
             }
             self.nodal_norm = f.iter().map(|v| v * v).sum::<f64>().sqrt();
+            self.nodal_potential = self.nodal_forces.iter().map(|c| c.potential()).sum();
             // Forces on tied slaves fold onto their masters like the other loads.
             self.model.dofs.fold(&mut f);
             self.f_ext.iter_mut().zip(&f).for_each(|(e, v)| *e += v);
@@ -422,8 +483,100 @@ impl<'m> Solver<'m> {
         Err(last_failure)
     }
 
+    /// Potential Π = Ψ + V_loads + Σ V_nodal of the last assembly at `state` (strain energy
+    /// `energy`), or None when a load or nodal-force term is not conservative.
+    pub(super) fn potential(&self, state: &State, scales: &[f64], energy: f64) -> Option<f64> {
+        Some(energy + self.model.load_potential(state, scales)? + self.nodal_potential?)
+    }
+
+    /// Energy line search along the Newton direction `du` (Nocedal & Wright 2006, §3.1,
+    /// backtracking with the Armijo condition; IPC's filtered line search, Li et al. 2020
+    /// §4.3): the step starts at the largest collision-free fraction of `du` that every
+    /// nodal-force term allows ([`super::NodalForces::max_step`]) and is halved until
+    /// Π(s) ≤ Π₀ + 10⁻⁴ s·slope (slope = ∇Π·du < 0), Π = [`Solver::potential`] + `extra`
+    /// (the inertia potential of a time step), within a round-off allowance of 10⁻¹⁰ of the
+    /// magnitudes making up Π₀. The accepted state is assembled with its tangent. On failure
+    /// `state` is restored (and reassembled) and the reason returned, with the element whose
+    /// failure ended the search, if one did.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn energy_line_search(
+        &mut self,
+        state: &mut State,
+        du: &[f64],
+        scales: &[f64],
+        slope: f64,
+        pi0: f64,
+        magnitude: f64,
+        extra: &mut dyn FnMut(&Self, &State) -> f64,
+    ) -> Result<Descent, (Option<usize>, String)> {
+        let base = state.clone();
+        let mut s = 1.0f64;
+        if !self.nodal_forces.is_empty() {
+            let mut full = base.clone();
+            self.model.update(&mut full, du, 1.0);
+            s = self.nodal_forces.iter().map(|c| c.max_step(self.model, &base, &full)).fold(1.0, f64::min);
+        }
+        // Trust region on the director update: no node turns by more than MAX_ROTATION.
+        let turn = self.largest_rotation(du);
+        if turn > MAX_ROTATION {
+            s = s.min(MAX_ROTATION / turn);
+        }
+        let tol = 1e-10 * magnitude.abs().max(pi0.abs());
+        let mut cuts = 0;
+        let mut last = String::from("no admissible state along the Newton direction");
+        let mut failing = None;
+        if s > 0.0 {
+            for tries in 0..40 {
+                *state = base.clone();
+                self.model.update(state, du, s);
+                let tangent = tries == 0;
+                match self.assemble(state, scales, tangent) {
+                    Ok(e) if self.f_int.iter().chain(&self.f_ext).all(|v| v.is_finite()) => {
+                        let pi = self.potential(state, scales, e).map(|p| p + extra(self, state)).unwrap_or(f64::NAN);
+                        if pi.is_finite() && pi <= pi0 + 1e-4 * s * slope + tol {
+                            if !tangent && let Err(f) = self.assemble(state, scales, true) {
+                                last = f.to_string();
+                                failing = Some(f.element);
+                                break;
+                            }
+                            return Ok(Descent { energy: e, cuts });
+                        }
+                        last = format!("no decrease of the potential down to step {s:.2e} (Π₀ = {pi0:.6e}, slope {slope:.3e})");
+                    }
+                    Ok(_) => last = "forces not finite along the Newton direction".into(),
+                    Err(f) => {
+                        last = f.to_string();
+                        failing = Some(f.element);
+                    }
+                }
+                s *= 0.5;
+                cuts += 1;
+                if s < 1e-12 {
+                    break;
+                }
+            }
+        } else {
+            last = "the collision-free step along the Newton direction is zero".into();
+        }
+        *state = base;
+        let _ = self.assemble(state, scales, true);
+        Err((failing, last))
+    }
+
+    /// Largest nodal tilt |(δα₁, δα₂)| of the free-DOF increment `du` (radians).
+    pub(super) fn largest_rotation(&self, du: &[f64]) -> f64 {
+        let eq = &self.model.dofs.eq;
+        (0..self.model.n_nodes())
+            .map(|n| {
+                let a = [3, 4].map(|k| eq[NODE_DOFS * n + k]).map(|e| if e == FIXED { 0.0 } else { du[e] });
+                a[0].hypot(a[1])
+            })
+            .fold(0.0, f64::max)
+    }
+
     /// Newton iterations for one increment ending at `scales`, starting from `state`.
-    fn attempt(&mut self, state: &mut State, scales: &[f64], linear: bool, progress: &mut dyn FnMut(usize, f64)) -> Attempt {
+    /// With `early_exit` (automatic increments) the attempt stops as soon as divergence shows.
+    fn attempt(&mut self, state: &mut State, scales: &[f64], linear: bool, early_exit: bool, progress: &mut dyn FnMut(usize, f64)) -> Attempt {
         let n = self.model.dofs.n_free;
         let mut r = vec![0.0; n];
         let mut du = vec![0.0; n];
@@ -478,12 +631,35 @@ impl<'m> Solver<'m> {
             if energy0.is_none() {
                 energy0 = Some(g0.abs().max(1e-300));
             }
-            match self.safeguarded_update(state, &du, scales, self.settings.line_search) {
-                Ok(e) => energy = e,
-                Err(Some(f)) => return failed(it, &residuals, Some(f.element), f.to_string()),
-                Err(None) => {
+            if early_exit {
+                // Divergence caught early (automatic increments cut back at once): a first
+                // correction that turns a director by more than a radian means the increment
+                // is far outside Newton's basin; so does a residual grown twice in a row.
+                let turn = self.largest_rotation(&du);
+                if it == 0 && turn > MAX_FIRST_ROTATION {
                     let el = self.worst_element(&r);
-                    return failed(it, &residuals, el, "line search found no finite state".into());
+                    return failed(it, &residuals, el, format!("increment too large: the first Newton correction turns a director by {turn:.2} rad"));
+                }
+                let n_r = residuals.len();
+                if n_r >= 4 && residuals[n_r - 1] > residuals[n_r - 2] && residuals[n_r - 2] > residuals[n_r - 3] {
+                    let el = self.worst_element(&r);
+                    return failed(it, &residuals, el, "Newton diverging (residual grew in two successive iterations)".into());
+                }
+            }
+            // The admissibility-only update: an Armijo energy line search (with the 0.5 rad
+            // director trust region) was measured slower here (sagging plate, 20×20: 476
+            // against 237 Newton iterations with automatic increments; fixed increments
+            // failed from one increment), as Newton on thin shells legitimately overshoots
+            // the energy for an iteration or two.
+            let update = self.safeguarded_update(state, &du, scales, self.settings.line_search).map_err(|f| match f {
+                Some(f) => f.to_string(),
+                None => "line search found no finite state".into(),
+            });
+            match update {
+                Ok(e) => energy = e,
+                Err(cause) => {
+                    let el = self.worst_element(&r);
+                    return failed(it, &residuals, el, cause);
                 }
             }
         }
@@ -538,6 +714,13 @@ impl<'m> Solver<'m> {
                 }
             }
             let at = |tau: f64| -> Vec<f64> { start.iter().zip(&step.target_scales).map(|(a, b)| a + tau * (b - a)).collect() };
+            if !step.linear && step.automatic_increments && matches!(step.kind, StepKind::Static) {
+                scales = self.run_automatic(si, step, &start, state, &mut tracker, on_increment, &mut |p: &Progress| {
+                    progress(&Progress { fraction: (done_before as f64 + p.fraction * n_inc as f64) / total as f64, ..p.clone() })
+                })?;
+                done_before += n_inc;
+                continue;
+            }
             let mut tau = 0.0;
             let mut dtau = 1.0 / n_inc as f64;
             let mut cutback_level = 0usize;
@@ -555,7 +738,7 @@ impl<'m> Solver<'m> {
                     self.begin_nodal_increment((next - tau) * n_inc as f64);
                     let outcome = match step.kind {
                         StepKind::StaticDamped => self.attempt_damped(state, &trial_scales, &mut report_progress),
-                        _ => self.attempt(state, &trial_scales, step.linear, &mut report_progress),
+                        _ => self.attempt(state, &trial_scales, step.linear, false, &mut report_progress),
                     };
                     match outcome {
                         Attempt::Converged { iterations: its, residuals, indefinite: ind, energy } => {
@@ -610,6 +793,7 @@ impl<'m> Solver<'m> {
                                     step: si,
                                     step_name: step.name.clone(),
                                     last_converged_time: si as f64 + tau,
+                                    simulated_time: None,
                                     iteration,
                                     residuals,
                                     worst_element,
@@ -626,5 +810,105 @@ impl<'m> Solver<'m> {
             done_before += n_inc;
         }
         Ok(())
+    }
+
+    /// Automatic load incrementation of a static step (Crisfield 1991, §9.5; Abaqus-style
+    /// automatic increments): the first increment is 1/`increments` of the step, an increment
+    /// that converged within 8 iterations doubles the next (within 12: ×1.5; above 18: ×½),
+    /// and a failed one — stopped early when divergence shows ([`Solver::attempt`]) — is
+    /// retried at a quarter of its size. Every converged increment is reported; the step ends
+    /// exactly at its target scales. Returns the scales reached.
+    #[allow(clippy::too_many_arguments)]
+    fn run_automatic(
+        &mut self,
+        si: usize,
+        step: &StepPlan,
+        start: &[f64],
+        state: &mut State,
+        tracker: &mut super::arclength::StabilityTracker,
+        on_increment: &mut dyn FnMut(&IncrementReport, &State, &Self),
+        progress: &mut dyn FnMut(&Progress),
+    ) -> Result<Vec<f64>, SolveError> {
+        let at = |tau: f64| -> Vec<f64> { start.iter().zip(&step.target_scales).map(|(a, b)| a + tau * (b - a)).collect() };
+        let mut tau = 0.0f64;
+        let mut dtau = 1.0 / step.increments.max(1) as f64;
+        let min_dtau = dtau * 0.25f64.powi(self.settings.max_cutbacks as i32);
+        let mut inc = 0;
+        let mut iterations = 0;
+        let mut cutbacks = 0;
+        let mut indefinite = false;
+        // The previous converged state and its load level, for the extrapolating predictor.
+        let mut previous: Option<(State, f64)> = None;
+        loop {
+            let next = if tau + dtau >= 1.0 - 1e-9 { 1.0 } else { tau + dtau };
+            let trial_scales = at(next);
+            let saved = state.clone();
+            let tau_start = tau;
+            if let Some((old, tau_old)) = &previous {
+                extrapolate(state, old, (next - tau) / (tau - tau_old));
+            }
+            let mut report_progress = |it: usize, res: f64| progress(&Progress { step: si, fraction: next, iteration: it, residual: res });
+            self.begin_nodal_increment((next - tau) * step.increments.max(1) as f64);
+            match self.attempt(state, &trial_scales, false, true, &mut report_progress) {
+                Attempt::Converged { iterations: its, residuals, indefinite: ind, energy } => {
+                    iterations += its;
+                    indefinite |= ind;
+                    tau = next;
+                    inc += 1;
+                    self.commit_nodal_forces(state);
+                    let (negative_pivots, stiffness_parameter, stability_event) = self.stability_at(state, start, &step.target_scales, tracker);
+                    let report = IncrementReport {
+                        step: si,
+                        step_name: step.name.clone(),
+                        increment: inc,
+                        time: si as f64 + tau,
+                        scales: trial_scales.clone(),
+                        iterations,
+                        residuals,
+                        cutbacks,
+                        indefinite_tangent: indefinite,
+                        energy,
+                        extra: std::mem::take(&mut self.extra_reports),
+                        negative_pivots,
+                        stiffness_parameter,
+                        stability_event,
+                        ..Default::default()
+                    };
+                    on_increment(&report, state, self);
+                    if tau >= 1.0 {
+                        return Ok(trial_scales);
+                    }
+                    previous = Some((saved, tau_start));
+                    iterations = 0;
+                    cutbacks = 0;
+                    indefinite = false;
+                    dtau *= match its {
+                        0..=8 => 2.0,
+                        9..=12 => 1.5,
+                        13..=18 => 1.0,
+                        _ => 0.5,
+                    };
+                }
+                Attempt::Failed { iteration, residuals, worst_element, cause } => {
+                    *state = saved;
+                    iterations += iteration;
+                    cutbacks += 1;
+                    dtau *= 0.25;
+                    if dtau < min_dtau * (1.0 - 1e-9) {
+                        let cause = super::diagnose::explain(self.model, state, &cause, indefinite || self.cholesky.kind() == FactorKind::Ldlt);
+                        return Err(SolveError {
+                            step: si,
+                            step_name: step.name.clone(),
+                            last_converged_time: si as f64 + tau,
+                            simulated_time: None,
+                            iteration,
+                            residuals,
+                            worst_element,
+                            cause: format!("{cause}; automatic increment cut to {:.3e} of the step (max_cutbacks = {} quarterings of the first)", dtau * 4.0, self.settings.max_cutbacks),
+                        });
+                    }
+                }
+            }
+        }
     }
 }

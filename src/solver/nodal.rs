@@ -29,6 +29,25 @@ pub trait NodalForces: Send {
         let _ = (model, state);
         None
     }
+    /// Potential energy of the forces at the state of the last [`NodalForces::add`] (their
+    /// work is −∇ of it), or None when the forces are not conservative; the energy line
+    /// search of the solver needs every term's potential and falls back to an admissibility
+    /// search otherwise.
+    fn potential(&self) -> Option<f64> {
+        None
+    }
+    /// Largest fraction s ∈ [0, 1] of the straight move of every node from `from` to `to`
+    /// that stays admissible for this term (continuous collision detection of a barrier).
+    /// Default 1.
+    fn max_step(&self, model: &Model, from: &State, to: &State) -> f64 {
+        let _ = (model, from, to);
+        1.0
+    }
+    /// Whether the term is a barrier (intersection-free contact): Dynamic steps then minimise
+    /// the incremental potential by default.
+    fn is_barrier(&self) -> bool {
+        false
+    }
     /// Wall time spent in proximity search so far (s), reported separately from assembly.
     fn search_seconds(&self) -> f64 {
         0.0
