@@ -76,3 +76,20 @@ fn hinged_roof_arc_length_recovers_by_cutting_back() {
     check_path(&c, "arc length with cut-backs");
     assert_eq!(c.summary.stability_events.len(), 2);
 }
+
+/// An arc-length step whose target load factor lies on the first rising branch (1.5, below
+/// the limit load at λ ≈ 2.23) ends exactly at it — the last increment is finished by load
+/// control instead of overshooting — and every earlier increment stays below it.
+#[test]
+fn arc_length_ends_exactly_at_the_target_load_factor() {
+    let text = bench::scenes::HINGED_ROOF.replace("max_load_factor: 4.0", "max_load_factor: 1.5");
+    let sc = plyshell::scene::parse("roof.ron", &text).expect("parse");
+    let built = plyshell::scene::build(&sc, "roof.ron", &text).expect("build");
+    let mut solver = plyshell::solver::Solver::new(&built.model, sc.solver.clone()).expect("solver");
+    let mut state = built.model.initial_state();
+    let mut factors = Vec::new();
+    solver.run(&built.steps, &mut state, &mut |r, _, _| factors.extend(r.load_factor), &mut |_| {}).expect("solve");
+    let last = *factors.last().expect("increments");
+    assert!((last - 1.5).abs() < 1e-12, "ends at λ = {last}");
+    assert!(factors[..factors.len() - 1].iter().all(|&l| l.abs() < 1.5), "{factors:?}");
+}

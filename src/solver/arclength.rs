@@ -31,7 +31,7 @@
 
 use std::time::Instant;
 
-use super::newton::{IncrementReport, Progress, SolveError, Solver, StepPlan};
+use super::newton::{Attempt, IncrementReport, Progress, SolveError, Solver, StepPlan};
 use super::StepKind;
 use crate::element::NODE_DOFS;
 use crate::model::{State, FIXED};
@@ -247,7 +247,25 @@ impl<'m> Solver<'m> {
                             }
                         }
                     };
-                    let (its, residuals, energy, indefinite, dlam, du) = outcome?;
+                    let (mut its, mut residuals, mut energy, mut indefinite, mut dlam, du) = outcome?;
+                    if (lambda + dlam).abs() > max_load_factor && lambda.abs() < max_load_factor {
+                        // The increment passed the target load factor: solve the last part by
+                        // load control to exactly ±max_load_factor from the previous state (on the
+                        // branch just followed); keep the arc-length result if that fails.
+                        let arc_state = std::mem::replace(state, saved.clone());
+                        let target = (lambda + dlam).signum() * max_load_factor;
+                        let mut report = |it: usize, res: f64| progress(&Progress { step: si, fraction: frac, iteration: it, residual: res });
+                        match self.attempt(state, &scales_at(target), false, false, &mut report) {
+                            Attempt::Converged { iterations: k, residuals: r, indefinite: ind, energy: e } => {
+                                iterations += k;
+                                (its, residuals, energy, indefinite, dlam) = (k, r, e, indefinite || ind, target - lambda);
+                            }
+                            Attempt::Failed { iteration, .. } => {
+                                iterations += iteration;
+                                *state = arc_state;
+                            }
+                        }
+                    }
                     self.commit_nodal_forces(state);
                     lambda += dlam;
                     let scales = scales_at(lambda);

@@ -576,7 +576,7 @@ impl<'m> Solver<'m> {
 
     /// Newton iterations for one increment ending at `scales`, starting from `state`.
     /// With `early_exit` (automatic increments) the attempt stops as soon as divergence shows.
-    fn attempt(&mut self, state: &mut State, scales: &[f64], linear: bool, early_exit: bool, progress: &mut dyn FnMut(usize, f64)) -> Attempt {
+    pub(super) fn attempt(&mut self, state: &mut State, scales: &[f64], linear: bool, early_exit: bool, progress: &mut dyn FnMut(usize, f64)) -> Attempt {
         let n = self.model.dofs.n_free;
         let mut r = vec![0.0; n];
         let mut du = vec![0.0; n];
