@@ -33,7 +33,8 @@ use nalgebra::{Matrix3, SymmetricEigen, Vector3};
 use rayon::prelude::*;
 use serde::Serialize;
 
-use super::body::{RigidBody, Shape};
+use super::body::RigidBody;
+use super::mechanics::distance_hessian;
 use crate::element::NODE_DOFS;
 use crate::model::{Model, State};
 use crate::solver::NodalForces;
@@ -166,27 +167,6 @@ fn psd3(m: &Matrix3<f64>) -> Matrix3<f64> {
         out += v * v.transpose() * l;
     }
     out
-}
-
-/// Hessian of the signed distance of `body` at `x` (outward normal `n`, distance `dist`):
-/// zero for the plane, (I − nnᵀ)/(R + d) for the sphere, central differences of the
-/// projected normal otherwise.
-fn distance_hessian(body: &RigidBody, x: &Vector3<f64>, n: &Vector3<f64>, dist: f64) -> Matrix3<f64> {
-    match &body.shape {
-        Shape::Plane => Matrix3::zeros(),
-        Shape::Sphere(b) => (Matrix3::identity() - n * n.transpose()) / (b.radius + body.rounding + dist).max(1e-12),
-        _ => {
-            let h = 1e-6 * x.norm().max(dist.abs()).max(1e-3);
-            let mut m = Matrix3::zeros();
-            for j in 0..3 {
-                let mut e = Vector3::zeros();
-                e[j] = h;
-                let probe = |y: Vector3<f64>| body.proximity(&y, f64::MAX).map(|p| p.normal).unwrap_or(*n);
-                m.set_column(j, &((probe(x + e) - probe(x - e)) / (2.0 * h)));
-            }
-            (m + m.transpose()) * 0.5
-        }
-    }
 }
 
 impl BarrierContact {

@@ -301,7 +301,7 @@ impl ContactSet {
 /// Hessian ∇n of the signed distance of `body` at `x` (outward normal `n`, distance `d`):
 /// zero for the plane, (I − nnᵀ)/(R + d) for the sphere, central differences of the
 /// projected normal (step 1e-6 of the distance scale) otherwise.
-fn distance_hessian(body: &RigidBody, x: &Vector3<f64>, n: &Vector3<f64>, d: f64) -> Matrix3<f64> {
+pub(super) fn distance_hessian(body: &RigidBody, x: &Vector3<f64>, n: &Vector3<f64>, d: f64) -> Matrix3<f64> {
     match &body.shape {
         Shape::Plane => Matrix3::zeros(),
         Shape::Sphere(b) => (Matrix3::identity() - n * n.transpose()) / (b.radius + body.rounding + d).max(1e-12),
