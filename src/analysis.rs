@@ -55,7 +55,7 @@ pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &m
         crate::contact::attach(&mut solver, model, c).map_err(RunError::Setup)?;
     }
     if let Some(s) = &built.interply {
-        crate::contact::interply::attach(&mut solver, model, s);
+        crate::contact::interply::attach(&mut solver, model, s).map_err(RunError::Setup)?;
     }
     let (dofs, tangent_nnz, factor_nnz) = solver.sizes();
     let mut summary = Summary {

@@ -126,7 +126,7 @@ fn solve(stitch_xs: &[f64]) -> Run {
     let setup = built.interply.as_ref().expect("a multi-ply garment with interply enabled gets inter-ply contact");
     let t = std::time::Instant::now();
     let mut solver = Solver::new(model, sc.solver.clone()).expect("solver");
-    plyshell::contact::interply::attach(&mut solver, model, setup);
+    plyshell::contact::interply::attach(&mut solver, model, setup).expect("inter-ply contact attaches");
     let mut state = model.initial_state();
     let mut iterations = 0;
     solver.run(&built.steps, &mut state, &mut |r, _, _| iterations += r.iterations, &mut |_| {}).unwrap_or_else(|e| panic!("{e}"));
@@ -197,12 +197,16 @@ fn stitching_stiffens_plies_that_contact_keeps_apart() {
 /// faille 0.30 mm, knit liner 0.60 mm — the `fabric.rs` presets and their areal densities;
 /// 30 cm × 5 cm, 1 cm elements, plies free: not joined anywhere) dropped flat onto a rigid
 /// horizontal cylinder (radius 5 cm, friction 0.3) under gravity in a damped Dynamic step,
-/// bends over it and comes to rest. Checked independently of the contact code with parry3d:
+/// bends over it and comes to rest — plies and cylinder in barrier contact (`contact::ipc`:
+/// point–triangle and edge–edge barriers between all plies, self-contact on; body barrier).
+/// Checked independently of the contact code with parry3d:
 /// every node of ply k lies on its side of ply k±1's deformed surface at least the thickness
 /// offset (h_k + h_{k±1})/2 apart up to 5 % of the thinner ply's thickness (the issue's
 /// bound), no ply face is inside the cylinder by more than 5 % of its thickness, and at rest
 /// the cylinder carries the strip's weight Σρ_k g A (static equilibrium, 2 %, as
-/// tests/sleeve_on_arm.rs).
+/// tests/sleeve_on_arm.rs). And no two triangles of the plies, thickened to prisms of the
+/// contact thickness (1 − f) h (f = 0.1, the barrier's share of the thickness, the
+/// compressible part of the fabric), overlap (`contact::intersection`, GJK on every pair).
 #[test]
 fn three_ply_strip_bent_over_a_cylinder_keeps_its_plies_apart() {
     const R: f64 = 0.05;
@@ -220,14 +224,14 @@ fn three_ply_strip_bent_over_a_cylinder_keeps_its_plies_apart() {
                   edges: {{"left": (from: 3, to: 0), "right": (from: 1, to: 2)}},
                   grain: (1.0, 0.0), plies: ["outer", "carbon", "liner"],
                   placement: Rigid(translation: (-0.15, -0.025, 0.050626)))],
-        interply: (enabled: true),
+        interply: (enabled: true, formulation: Barrier()),
     )),
     loads: {{"g1": SelfWeight(part: "strip/outer", g: (0.0, 0.0, -{G})), "g2": SelfWeight(part: "strip/carbon", g: (0.0, 0.0, -{G})), "g3": SelfWeight(part: "strip/liner", g: (0.0, 0.0, -{G}))}},
     steps: [(name: "drape", increments: 1, scale: {{"g1": 1.0, "g2": 1.0, "g3": 1.0}},
              kind: Dynamic((dt: 4.0e-3, dt_max: 0.05, mass_damping: 30.0, max_steps: 3000)))],
     contact: Some((
         bodies: [(name: "cylinder", shape: Cylinder(radius: {R}, height: 0.2), rotation: (90.0, 0.0, 0.0), friction: 0.3)],
-        penalty_factor: 0.1,
+        formulation: Barrier(),
     )),
     output: (vtu: false),
 )"#,
@@ -244,7 +248,7 @@ fn three_ply_strip_bent_over_a_cylinder_keeps_its_plies_apart() {
     let t = std::time::Instant::now();
     let mut solver = Solver::new(model, sc.solver.clone()).expect("solver");
     plyshell::contact::attach(&mut solver, model, built.contact.as_ref().expect("contact")).expect("contact attaches");
-    plyshell::contact::interply::attach(&mut solver, model, built.interply.as_ref().expect("interply"));
+    plyshell::contact::interply::attach(&mut solver, model, built.interply.as_ref().expect("interply")).expect("inter-ply contact attaches");
     let mut state = model.initial_state();
     let mut reports = Vec::new();
     solver.run(&built.steps, &mut state, &mut |r, _, _| reports.push(r.clone()), &mut |_| {}).unwrap_or_else(|e| panic!("{e}"));
@@ -271,19 +275,23 @@ fn three_ply_strip_bent_over_a_cylinder_keeps_its_plies_apart() {
             body_pen = body_pen.max((0.5 * HS[k] - signed) / HS[k]);
         }
     }
+    let overlaps = plyshell::contact::intersection::intersecting_prisms(model, &state, &parts, 1.0 - 0.1);
     let last = reports.last().expect("increments");
     let lift = last.extra.iter().rev().find_map(|v| v.get("contact").cloned()).expect("contact report")["resultant"][2].as_f64().expect("resultant");
     let weight: f64 = RHOS.iter().map(|r| r * G * 0.3 * 0.05).sum();
     println!(
-        "three-ply drape: {} DOFs, {} time steps, {iterations} Newton iterations, {seconds:.1} s (inter-ply search {:.2} s, pattern growths {}); ply penetration {pen:.3e} m = {:.2} % of the thinnest ply (ply k+1 on k {down:.3e}, k on k+1 {up:.3e}); cylinder penetration {:.2} % of h; reaction {lift:.6e} N vs weight {weight:.6e} N ({:+.3} %)",
+        "three-ply drape: {} DOFs, {} time steps, {iterations} Newton iterations, {seconds:.1} s (contact {:.2} s, search {:.2} s, pattern growths {}); overlapping prisms {}; ply penetration {pen:.3e} m = {:.2} % of the thinnest ply (ply k+1 on k {down:.3e}, k on k+1 {up:.3e}); cylinder penetration {:.2} % of h; reaction {lift:.6e} N vs weight {weight:.6e} N ({:+.3} %)",
         model.dofs.n_free,
         reports.len(),
+        solver.timings.contact,
         solver.timings.contact_search,
         solver.timings.pattern_growths,
+        overlaps.len(),
         100.0 * pen / h_min,
         100.0 * body_pen,
         100.0 * (lift / weight - 1.0)
     );
+    assert!(overlaps.is_empty(), "{} overlapping prisms, first {:?}", overlaps.len(), overlaps.first());
     assert!(pen < 0.05 * h_min, "ply penetration {pen} m");
     assert!(body_pen < 0.05, "cylinder penetration {body_pen} of h");
     assert!((lift / weight - 1.0).abs() < 0.02, "reaction {lift} vs weight {weight}");

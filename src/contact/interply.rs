@@ -111,6 +111,55 @@ pub struct InterplySetup {
     pub ply_pairs: Vec<(usize, usize)>,
     /// Penalty and friction controls.
     pub settings: InterplySettings,
+    /// Barrier contact between all the garment's surfaces instead of the node-to-surface
+    /// penalty (`contact::ipc`).
+    pub barrier: Option<crate::contact::ipc::SurfaceSetup>,
+}
+
+/// How plies (and panels) touch each other.
+#[derive(Clone, Debug, Serialize, serde::Deserialize)]
+pub enum InterplyFormulation {
+    /// Node-to-surface penalty between adjacent plies of a panel (this module).
+    Penalty,
+    /// Barrier potentials over point–triangle and edge–edge pairs of every ply of every
+    /// panel (`contact::ipc`): intersection-free, smooth, with self-contact.
+    Barrier {
+        /// Barrier thickness d̂ as a fraction of the contact distance (default 0.2).
+        #[serde(default = "default_distance_factor")]
+        distance_factor: f64,
+        /// Factor on the automatic barrier stiffness (default 1).
+        #[serde(default = "one")]
+        stiffness_factor: f64,
+        /// Friction stick regularisation δ as a multiple of d̂ (default 1).
+        #[serde(default = "one")]
+        friction_slip: f64,
+        /// Whether each ply also contacts itself (default true).
+        #[serde(default = "yes")]
+        self_contact: bool,
+        /// Largest compression of the thickness, as a fraction of the thinner ply's, before
+        /// the barrier stiffens (default 0.05).
+        #[serde(default = "default_compression")]
+        compression_tolerance: f64,
+    },
+}
+
+fn default_distance_factor() -> f64 {
+    crate::contact::ipc::SurfaceSettings::default().distance_factor
+}
+fn default_compression() -> f64 {
+    crate::contact::ipc::SurfaceSettings::default().compression_tolerance
+}
+fn one() -> f64 {
+    1.0
+}
+fn yes() -> bool {
+    true
+}
+
+impl Default for InterplyFormulation {
+    fn default() -> Self {
+        Self::Penalty
+    }
 }
 
 /// Inter-ply contact settings of a garment (`garment.interply` in a scene file).
@@ -126,6 +175,8 @@ pub struct InterplySpec {
     /// plies (`tests/interply.rs`) are unaffected. The cure is a smooth normal field
     /// (interpolated nodal normals) for the master surface.
     pub enabled: bool,
+    /// Penalty (default) or barrier formulation.
+    pub formulation: InterplyFormulation,
     /// Penalty factor c in k_n = c·min(A_s, A_m)·a/ℓ² (default 1).
     pub penalty_factor: f64,
     /// Explicit nodal normal penalty (N/m), overriding the automatic choice.
@@ -139,7 +190,7 @@ pub struct InterplySpec {
 impl Default for InterplySpec {
     fn default() -> Self {
         let s = InterplySettings::default();
-        Self { enabled: false, penalty_factor: s.penalty_factor, penalty: s.penalty, friction: s.friction, tangential_factor: s.tangential_factor }
+        Self { enabled: false, formulation: InterplyFormulation::default(), penalty_factor: s.penalty_factor, penalty: s.penalty, friction: s.friction, tangential_factor: s.tangential_factor }
     }
 }
 
@@ -175,11 +226,22 @@ pub fn garment_setup(
             ply_pairs.push((first_part + j, first_part + i));
         }
     }
+    let settings = InterplySettings { penalty_factor: s.penalty_factor, penalty: s.penalty, friction: s.friction, tangential_factor: s.tangential_factor };
+    if let InterplyFormulation::Barrier { distance_factor, stiffness_factor, friction_slip, self_contact, compression_tolerance } = s.formulation {
+        let surface = crate::contact::ipc::SurfaceSettings { distance_factor, stiffness_factor, friction: s.friction, friction_slip, self_contact, compression_tolerance };
+        if let Some((key, msg)) = surface.problem() {
+            return Err(bad(&format!("formulation.{key}"), msg));
+        }
+        if !s.enabled || (ply_pairs.is_empty() && mesh.parts.len() < 2 && !self_contact) {
+            return Ok(None);
+        }
+        let parts = (first_part..first_part + mesh.parts.len()).collect();
+        return Ok(Some(InterplySetup { ply_pairs, settings, barrier: Some(crate::contact::ipc::SurfaceSetup { parts, settings: surface }) }));
+    }
     if !s.enabled || ply_pairs.is_empty() {
         return Ok(None);
     }
-    let settings = InterplySettings { penalty_factor: s.penalty_factor, penalty: s.penalty, friction: s.friction, tangential_factor: s.tangential_factor };
-    Ok(Some(InterplySetup { ply_pairs, settings }))
+    Ok(Some(InterplySetup { ply_pairs, settings, barrier: None }))
 }
 
 /// A ply's surface: its quads split into triangles.
@@ -859,9 +921,15 @@ impl NodalForces for InterplyContact {
 }
 
 /// The inter-ply contact of `setup` as a term of `solver` (its node-pair couplings enter the
-/// tangent's pattern).
-pub fn attach<'m>(solver: &mut crate::solver::Solver<'m>, model: &'m Model, setup: &InterplySetup) {
-    solver.add_nodal_forces(Box::new(InterplyContact::new(model, setup)));
+/// tangent's pattern); a barrier setup refuses an intersecting start.
+pub fn attach<'m>(solver: &mut crate::solver::Solver<'m>, model: &'m Model, setup: &InterplySetup) -> Result<(), String> {
+    match &setup.barrier {
+        Some(b) => crate::contact::ipc::attach(solver, model, b, &model.initial_state()),
+        None => {
+            solver.add_nodal_forces(Box::new(InterplyContact::new(model, setup)));
+            Ok(())
+        }
+    }
 }
 
 /// A scalar with its gradient with respect to up to [`NV`] variables (forward-mode dual
@@ -984,7 +1052,7 @@ mod tests {
     }
 
     fn setup(friction: f64) -> InterplySetup {
-        InterplySetup { ply_pairs: vec![(1, 0)], settings: InterplySettings { friction, ..Default::default() } }
+        InterplySetup { ply_pairs: vec![(1, 0)], settings: InterplySettings { friction, ..Default::default() }, barrier: None }
     }
 
     /// Forces (all DOFs) and the dense Jacobian ∂f/∂x over the translations of `nodes`.

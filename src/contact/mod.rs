@@ -5,6 +5,8 @@ pub mod barrier;
 pub mod body;
 pub mod drape;
 pub mod interply;
+pub mod intersection;
+pub mod ipc;
 pub mod mechanics;
 pub mod stabilize;
 pub mod trimesh_io;

@@ -455,7 +455,8 @@ impl<'m> Solver<'m> {
     }
 
     /// Safeguarded Newton update shared by the static and dynamic steps: `state` += s·`du`
-    /// with s = 1, ½, ¼, … (six tries; one when `backtrack` is false), taking the first
+    /// with s = s₀, s₀/2, s₀/4, … (six tries; one when `backtrack` is false; s₀ = 1, or the
+    /// collision-free fraction when a barrier term is present), taking the first
     /// trial state that can be evaluated — every element assembles and the internal and
     /// external forces are finite (a nodal-force term writes NaN for an inadmissible state,
     /// e.g. a node carried through a body). Residual growth alone is no reason to back off:
@@ -464,7 +465,15 @@ impl<'m> Solver<'m> {
     /// energy, or, with `state` restored, the last element failure (None: forces not finite).
     pub(super) fn safeguarded_update(&mut self, state: &mut State, du: &[f64], scales: &[f64], backtrack: bool) -> Result<f64, Option<AssemblyFailure>> {
         let base = state.clone();
-        let mut step = 1.0;
+        // Barrier terms: start at the largest collision-free fraction (continuous collision
+        // detection), so that no iterate tunnels through a surface between two admissible
+        // states.
+        let mut step = 1.0f64;
+        if self.nodal_forces.iter().any(|c| c.is_barrier()) {
+            let mut full = base.clone();
+            self.model.update(&mut full, du, 1.0);
+            step = self.nodal_forces.iter().map(|c| c.max_step(self.model, &base, &full)).fold(1.0, f64::min);
+        }
         let mut last_failure = None;
         for _ in 0..6 {
             *state = base.clone();

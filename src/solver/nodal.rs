@@ -174,7 +174,7 @@ mod tests {
         let sc = scene::parse("s.ron", &text).unwrap();
         let built = scene::build(&sc, "s.ron", &text).unwrap();
         let model = &built.model;
-        let setup = InterplySetup { ply_pairs: vec![(0, 1)], settings: InterplySettings { friction: 0.0, ..Default::default() } };
+        let setup = InterplySetup { ply_pairs: vec![(0, 1)], settings: InterplySettings { friction: 0.0, ..Default::default() }, barrier: None };
         let mut solver = Solver::new(model, Default::default()).unwrap();
         solver.add_nodal_forces(Box::new(InterplyContact::new(model, &setup)));
         let mut st = model.initial_state();

@@ -1,0 +1,57 @@
+//! Broad phase of surface contact: candidate point–triangle and edge–edge pairs whose
+//! bounding boxes, inflated by a reach, overlap — at one configuration or over the straight
+//! sweep between two (for collision detection). A parry3d bounding-volume hierarchy of the
+//! triangles (edges) is queried with each point's (edge's) box, so the search costs
+//! O(n log n), not O(n²).
+
+use nalgebra::Vector3;
+use parry3d_f64::bounding_volume::Aabb;
+use parry3d_f64::math::Vector as PVec;
+use parry3d_f64::partitioning::{Bvh, BvhBuildStrategy};
+use rayon::prelude::*;
+
+fn aabb(points: impl Iterator<Item = Vector3<f64>>, inflate: f64) -> Aabb {
+    let mut lo = Vector3::repeat(f64::INFINITY);
+    let mut hi = Vector3::repeat(f64::NEG_INFINITY);
+    for p in points {
+        lo = lo.inf(&p);
+        hi = hi.sup(&p);
+    }
+    Aabb::new(PVec::new(lo.x - inflate, lo.y - inflate, lo.z - inflate), PVec::new(hi.x + inflate, hi.y + inflate, hi.z + inflate))
+}
+
+/// Candidate pairs (point index, triangle index) and (edge index a, edge index b), a < b,
+/// whose boxes come within `reach` of each other. Each primitive's box spans its nodes'
+/// positions in every configuration of `configs` (one: a configuration; two: a sweep).
+/// `point_ok(p, t)` and `edge_ok(a, b)` filter out excluded pairs.
+pub fn candidates(
+    points: &[usize],
+    tris: &[[usize; 3]],
+    edges: &[[usize; 2]],
+    configs: &[&dyn Fn(usize) -> Vector3<f64>],
+    reach: f64,
+    point_ok: &(dyn Fn(usize, usize) -> bool + Sync),
+    edge_ok: &(dyn Fn(usize, usize) -> bool + Sync),
+) -> (Vec<(usize, usize)>, Vec<(usize, usize)>) {
+    let tri_boxes: Vec<Aabb> = tris.iter().map(|t| aabb(configs.iter().flat_map(|x| t.iter().map(move |&n| x(n))), 0.0)).collect();
+    let edge_boxes: Vec<Aabb> = edges.iter().map(|e| aabb(configs.iter().flat_map(|x| e.iter().map(move |&n| x(n))), 0.0)).collect();
+    let point_boxes: Vec<Aabb> = points.iter().map(|&n| aabb(configs.iter().map(|x| x(n)), reach)).collect();
+    let inflated_edges: Vec<Aabb> = edge_boxes.iter().map(|b| aabb([b.mins, b.maxs].iter().map(|p| Vector3::new(p.x, p.y, p.z)), reach)).collect();
+    let tri_bvh = Bvh::from_leaves(BvhBuildStrategy::default(), &tri_boxes);
+    let edge_bvh = Bvh::from_leaves(BvhBuildStrategy::default(), &edge_boxes);
+    let pt: Vec<(usize, usize)> = (0..points.len())
+        .into_par_iter()
+        .flat_map_iter(|i| {
+            let hits: Vec<(usize, usize)> = tri_bvh.intersect_aabb(&point_boxes[i]).map(|t| (i, t as usize)).filter(|&(i, t)| point_ok(i, t)).collect();
+            hits.into_iter()
+        })
+        .collect();
+    let ee: Vec<(usize, usize)> = (0..edges.len())
+        .into_par_iter()
+        .flat_map_iter(|a| {
+            let hits: Vec<(usize, usize)> = edge_bvh.intersect_aabb(&inflated_edges[a]).map(|b| b as usize).filter(|&b| a < b && edge_ok(a, b)).map(|b| (a, b)).collect();
+            hits.into_iter()
+        })
+        .collect();
+    (pt, ee)
+}

@@ -1,0 +1,9 @@
+//! Incremental-potential contact between shell surfaces: second-order automatic
+//! differentiation, primitive distances, broad phase and the barrier/friction term.
+
+pub mod autodiff;
+pub mod broad_phase;
+pub mod primitives;
+pub mod surface;
+
+pub use surface::{attach, SurfaceContact, SurfaceIncrement, SurfaceSettings, SurfaceSetup};
