@@ -6,7 +6,7 @@ use std::path::Path;
 use nalgebra::Vector3;
 
 use super::SeamInfo;
-use crate::io::vtu::{write_vtu, DataArray, VtuMesh};
+use crate::io::vtu::{write_vtu, DataArray, FieldValues, VtuMesh};
 use crate::model::{Model, State};
 
 /// Names and ids of the garment's panels, plies and materials, per model part and node.
@@ -14,8 +14,10 @@ use crate::model::{Model, State};
 pub struct GarmentLayout {
     /// Panel names (id = index).
     pub panels: Vec<String>,
-    /// Ply names (id = index).
+    /// Ply names (id = index), in stack order, innermost first.
     pub plies: Vec<String>,
+    /// Thickness of each ply (m), by ply id.
+    pub ply_thickness: Vec<f64>,
     /// Material names (id = index).
     pub materials: Vec<String>,
     /// (panel, ply, material) ids of each model part; −1 for parts outside the garment.
@@ -29,7 +31,9 @@ pub struct GarmentLayout {
 /// carry `seam_force_per_length` from the all-DOF internal and external forces `forces`;
 /// without, the flat pattern layout is written (seams as lines between the flat spans,
 /// forces zero). Cell data: `panel`, `ply`, `material`, `part`, `seam` (−1 where it does
-/// not apply) and the force per unit length (quads: zero).
+/// not apply) and the force per unit length (quads: zero). Field data (with a layout): by ply
+/// id, `ply_names` (UTF-8, each name ended by a NUL byte) and `ply_thickness` (m); likewise
+/// `panel_names` and `material_names`.
 pub fn write_garment_vtu(
     path: &Path,
     model: &Model,
@@ -79,6 +83,14 @@ pub fn write_garment_vtu(
         point_data: vec![DataArray { name: "displacement", components: 3, values: &displacement }],
         cell_data: vec![DataArray { name: "seam_force_per_length", components: 3, values: &force }],
         int_cell_data: vec![("panel", int(0)), ("ply", int(1)), ("material", int(2)), ("part", part), ("seam", seam)],
+        field_data: layout.map_or_else(Vec::new, |l| {
+            vec![
+                ("ply_names", FieldValues::names(&l.plies)),
+                ("ply_thickness", FieldValues::Float(l.ply_thickness.clone())),
+                ("panel_names", FieldValues::names(&l.panels)),
+                ("material_names", FieldValues::names(&l.materials)),
+            ]
+        }),
     };
     write_vtu(path, &mesh, binary)
 }

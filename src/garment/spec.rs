@@ -31,6 +31,32 @@ pub struct GarmentSpec {
     pub interply: crate::contact::interply::InterplySpec,
 }
 
+impl GarmentSpec {
+    /// Ply names in stack order, innermost first: each panel's stack (listed outermost
+    /// first) read from the inside out and merged, so that a ply lies after every ply that
+    /// is inside it in some panel (a ply first met in a later panel goes just after the ply
+    /// below it there, or first if it is innermost); plies used by no panel follow by name.
+    pub fn plies_in_stack_order(&self) -> Vec<String> {
+        let mut order: Vec<String> = Vec::new();
+        for p in &self.panels {
+            let mut below: Option<usize> = None;
+            for name in p.plies.iter().rev() {
+                below = Some(match order.iter().position(|o| o == name) {
+                    Some(i) => i,
+                    None => {
+                        let at = below.map_or(0, |b| b + 1);
+                        order.insert(at, name.clone());
+                        at
+                    }
+                });
+            }
+        }
+        let unused: Vec<String> = self.plies.keys().filter(|k| !order.contains(k)).cloned().collect();
+        order.extend(unused);
+        order
+    }
+}
+
 fn two_percent() -> f64 {
     0.02
 }
