@@ -29,6 +29,51 @@ pub struct GarmentSpec {
     /// Contact between adjacent plies of multi-ply panels (on by default).
     #[serde(default)]
     pub interply: crate::contact::interply::InterplySpec,
+    /// A pattern file whose pieces give the outline, notched edge spans and grain of every
+    /// panel written without an `outline` (matched by piece name).
+    #[serde(default)]
+    pub pattern: Option<PatternSource>,
+}
+
+/// A pattern file (see `crate::pattern`).
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum PatternSource {
+    /// DXF in the AAMA / ASTM D6673 layer convention; `file` relative to the scene file.
+    Dxf {
+        file: String,
+        /// Size to take from a graded file.
+        #[serde(default)]
+        size: Option<String>,
+        /// Drawing units, overriding the header's `$INSUNITS` (required when it is unitless).
+        #[serde(default)]
+        units: Option<LengthUnit>,
+    },
+}
+
+/// A unit of length of pattern files.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum LengthUnit {
+    /// Millimetre.
+    Mm,
+    /// Centimetre.
+    Cm,
+    /// Metre.
+    M,
+    /// Inch (25.4 mm).
+    In,
+}
+
+impl LengthUnit {
+    /// Metres per unit.
+    pub fn metres(self) -> f64 {
+        match self {
+            LengthUnit::Mm => 1e-3,
+            LengthUnit::Cm => 1e-2,
+            LengthUnit::M => 1.0,
+            LengthUnit::In => 0.0254,
+        }
+    }
 }
 
 impl GarmentSpec {
@@ -129,6 +174,8 @@ pub struct PanelSpec {
     /// Panel name.
     pub name: String,
     /// Closed outline in pattern coordinates (m), counter-clockwise, last vertex ≠ first.
+    /// Empty: the piece of the same name from the garment's `pattern` file.
+    #[serde(default)]
     pub outline: Vec<[f64; 2]>,
     /// Named edge spans of the outline.
     #[serde(default)]
