@@ -287,15 +287,19 @@ impl GarmentMesh {
             x += hi[0] - lo[0] + gap;
         }
         let mut flat = vec![None; n_nodes];
+        let mut pattern_uv = vec![None; n_nodes];
         for (gp, &f) in self.parts.iter().zip(first_node) {
             let pat = &self.patterns[gp.panel];
             for (n, uv) in pat.uv.iter().enumerate() {
                 if let Some(slot) = flat.get_mut(f + n) {
                     *slot = Some([uv[0] + shift[gp.panel][0], uv[1] + shift[gp.panel][1], -(gp.ply as f64) * gap]);
                 }
+                if let Some(slot) = pattern_uv.get_mut(f + n) {
+                    *slot = Some(*uv);
+                }
             }
         }
-        super::export::GarmentLayout { panels: spec.panels.iter().map(|p| p.name.clone()).collect(), plies, ply_thickness, materials, part_tags, flat }
+        super::export::GarmentLayout { panels: spec.panels.iter().map(|p| p.name.clone()).collect(), plies, ply_thickness, materials, part_tags, flat, pattern_uv }
     }
 
     /// Warnings for seams that look sewn crossed: with each side's row as given (`reversed`),

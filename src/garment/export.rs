@@ -1,11 +1,13 @@
 //! Garment export: quads tagged with panel, ply and material ids, and seams as line cells
-//! carrying their force per unit length; in 3D (a model state) or as the flat pattern.
+//! carrying their force per unit length; in 3D (a model state) or as the flat pattern; and
+//! the garment as a textured surface (groups per panel and ply, UVs from the pattern).
 
 use std::path::Path;
 
 use nalgebra::Vector3;
 
 use super::SeamInfo;
+use crate::io::surface::TexturedMesh;
 use crate::io::vtu::{write_vtu, DataArray, FieldValues, VtuMesh};
 use crate::model::{Model, State};
 
@@ -25,6 +27,39 @@ pub struct GarmentLayout {
     /// Flat-pattern position of each model node laid out for export (panels side by side,
     /// plies stacked below), or None for nodes outside the garment.
     pub flat: Vec<Option<[f64; 3]>>,
+    /// Pattern coordinates (u, v) of each model node in its panel's flat pattern (m), or None
+    /// for nodes outside the garment.
+    pub pattern_uv: Vec<Option<[f64; 2]>>,
+}
+
+/// The garment's quads as a textured surface for OBJ and glTF: one group `panel/ply` per
+/// ply of each panel (model part order), texture coordinates the flat pattern coordinates in
+/// metres (a tiling print texture of 1 m × 1 m maps at true scale, along the pattern's axes),
+/// vertex positions from `position(node)`. Returns the surface and the model node of each
+/// vertex (garment nodes only, in node order).
+pub fn garment_surface(model: &Model, layout: &GarmentLayout, position: impl Fn(usize) -> [f64; 3]) -> (TexturedMesh, Vec<usize>) {
+    let nodes: Vec<usize> = (0..model.n_nodes()).filter(|&n| layout.pattern_uv.get(n).copied().flatten().is_some()).collect();
+    let mut vertex = vec![usize::MAX; model.n_nodes()];
+    for (v, &n) in nodes.iter().enumerate() {
+        vertex[n] = v;
+    }
+    let mut groups: Vec<(String, Vec<[usize; 4]>)> = Vec::new();
+    for (pi, part) in model.parts.iter().enumerate() {
+        let Some(&[panel, ply, _]) = layout.part_tags.get(pi) else { continue };
+        let (Some(panel), Some(ply)) = (layout.panels.get(panel as usize).filter(|_| panel >= 0), layout.plies.get(ply as usize).filter(|_| ply >= 0)) else { continue };
+        let quads: Vec<[usize; 4]> = model.elements[part.first_element..part.first_element + part.n_elements]
+            .iter()
+            .map(|e| e.nodes.map(|n| vertex[n]))
+            .filter(|q| q.iter().all(|&v| v != usize::MAX))
+            .collect();
+        groups.push((format!("{panel}/{ply}"), quads));
+    }
+    let mesh = TexturedMesh {
+        positions: nodes.iter().map(|&n| position(n)).collect(),
+        uvs: nodes.iter().map(|&n| layout.pattern_uv[n].unwrap_or([0.0; 2])).collect(),
+        groups,
+    };
+    (mesh, nodes)
 }
 
 /// Writes the garment VTU. With `state`, points are the deformed positions and seam lines
