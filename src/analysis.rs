@@ -265,3 +265,23 @@ fn write_surfaces(dir: &Path, name: &str, model: &Model, state: &State, layout: 
     let glb_err = crate::io::gltf::write_glb(&dir.join(&glb), &mesh, &frames, &times, generator).err().map(|e| e.to_string());
     vec![(obj, obj_err), (glb, glb_err)]
 }
+
+/// The CalculiX / Abaqus deck of a built scene: besides the parts, its node sets (`N_name`),
+/// both sides of every seam (`SEAM_name_A` master, `SEAM_name_B` slave) and, for a garment,
+/// the elements of each panel across its plies (`PANEL_name`).
+pub fn inp_deck<'a>(scene: &Scene, built: &'a BuiltScene) -> crate::io::inp::InpDeck<'a> {
+    let model = &built.model;
+    let mut node_sets: Vec<(String, Vec<usize>)> = built.node_sets.iter().map(|(k, v)| (format!("N_{k}"), v.clone())).collect();
+    for s in &built.seams {
+        node_sets.push((format!("SEAM_{}_A", s.name), s.master.clone()));
+        node_sets.push((format!("SEAM_{}_B", s.name), s.slave.clone()));
+    }
+    let mut element_sets = Vec::new();
+    if let Some(l) = &built.garment {
+        for (p, name) in l.panels.iter().enumerate() {
+            let elements: Vec<usize> = (0..model.elements.len()).filter(|&e| l.part_tags.get(model.elements[e].part).is_some_and(|t| t[0] == p as i32)).collect();
+            element_sets.push((format!("PANEL_{name}"), elements));
+        }
+    }
+    crate::io::inp::InpDeck { heading: format!("plyshell scene '{}': {}", scene.name, scene.description), model, steps: &built.steps, node_sets, element_sets }
+}

@@ -3,6 +3,7 @@
 pub mod atomic;
 pub mod export;
 pub mod gltf;
+pub mod inp;
 pub mod modes;
 pub mod obj;
 pub mod plot;
