@@ -208,3 +208,33 @@ fn import_writes_a_scene_that_checks() {
         assert_eq!(panel.edges.len(), 3);
     }
 }
+
+/// Mutants of the shipped DXF (numbers replaced by extreme or non-finite values, truncation,
+/// byte flips; fixed seed) give a pattern or an error, never a panic, and never a pattern
+/// with a non-finite coordinate.
+#[test]
+fn mutated_dxf_files_never_panic() {
+    let bytes = std::fs::read(concat!(env!("CARGO_MANIFEST_DIR"), "/garments/patterns/two_piece.dxf")).expect("dxf");
+    let (mut ok, mut errors) = (0, 0);
+    for k in 0..2000u64 {
+        let mut rng = plyshell::fuzz::Rng::new(19 + k);
+        let mutant = plyshell::fuzz::mutate_mesh(&bytes, &mut rng);
+        let t = std::time::Instant::now();
+        let r = plyshell::pattern::dxf::read_dxf_bytes("mutant.dxf", &mutant, None, None);
+        if t.elapsed().as_secs_f64() > 0.05 {
+            println!("mutant {k}: {:.3} s", t.elapsed().as_secs_f64());
+        }
+        match r {
+            Ok(pieces) => {
+                ok += 1;
+                assert!(pieces.iter().all(|p| p.outline.iter().flatten().chain(&p.grain).all(|c| c.is_finite())), "mutant {k}");
+            }
+            Err(e) => {
+                errors += 1;
+                assert!(!e.message.contains("the DXF reader failed"), "mutant {k}: the DXF reader panicked: {e}");
+            }
+        }
+    }
+    println!("2000 mutants: {ok} read, {errors} errors");
+    assert!(ok > 0 && errors > 0);
+}

@@ -66,8 +66,11 @@ pub fn read_dxf_bytes(file: &str, bytes: &[u8], size: Option<&str>, units: Optio
     if bytes.iter().take(4096).all(|b| b.is_ascii_whitespace()) {
         return Err(err("the file is empty; expected a DXF drawing (ASTM D6673)".into()));
     }
-    // The DXF reader is third-party code: a panic inside it on hostile input becomes an error.
-    let loaded = std::panic::catch_unwind(|| Drawing::load(&mut std::io::Cursor::new(bytes)));
+    // The reader sees only the header variables used here ($ACADVER, $INSUNITS): it panics on
+    // out-of-range date variables (dxf 0.6.2 through chrono). Any other panic inside the
+    // third-party reader on hostile input still becomes an error.
+    let trimmed = minimal_header(bytes);
+    let loaded = std::panic::catch_unwind(|| Drawing::load(&mut std::io::Cursor::new(&trimmed)));
     let drawing = match loaded {
         Ok(Ok(d)) => d,
         Ok(Err(e)) => return Err(err(format!("not a readable DXF drawing: {e}"))),
@@ -98,6 +101,47 @@ pub fn read_dxf_bytes(file: &str, bytes: &[u8], size: Option<&str>, units: Optio
         pieces.push(piece);
     }
     choose_size(file, pieces, size)
+}
+
+/// `bytes` with the HEADER section (if any) reduced to `$ACADVER` (when it reads `AC` and
+/// four digits) and `$INSUNITS` (when an integer), everything else byte for byte.
+fn minimal_header(bytes: &[u8]) -> Vec<u8> {
+    // Line start offsets.
+    let mut starts = vec![0];
+    starts.extend(bytes.iter().enumerate().filter(|&(_, &b)| b == b'\n').map(|(i, _)| i + 1));
+    let line = |k: usize| -> &[u8] {
+        let (a, b) = (starts[k], starts.get(k + 1).map_or(bytes.len(), |&e| e - 1));
+        bytes.get(a..b.max(a)).unwrap_or(&[]).trim_ascii()
+    };
+    let n = starts.len();
+    let Some(begin) = (0..n.saturating_sub(3)).step_by(2).find(|&k| line(k) == b"0" && line(k + 1) == b"SECTION" && line(k + 2) == b"2" && line(k + 3) == b"HEADER") else {
+        return bytes.to_vec();
+    };
+    let Some(end) = (begin + 4..n.saturating_sub(1)).step_by(2).find(|&k| line(k) == b"0" && line(k + 1) == b"ENDSEC") else {
+        return bytes.to_vec();
+    };
+    let (mut version, mut units) = (None, None);
+    for k in (begin + 4..end).step_by(2) {
+        let next = |code: &[u8]| (k + 3 < end && line(k + 2) == code).then(|| String::from_utf8_lossy(line(k + 3)).into_owned());
+        if line(k) == b"9" && line(k + 1) == b"$ACADVER" {
+            version = next(b"1").filter(|v| v.len() == 6 && v.starts_with("AC") && v[2..].bytes().all(|c| c.is_ascii_digit()));
+        } else if line(k) == b"9" && line(k + 1) == b"$INSUNITS" {
+            units = next(b"70").and_then(|v| v.parse::<i16>().ok());
+        }
+    }
+    let mut header = String::from("0\nSECTION\n2\nHEADER\n");
+    if let Some(v) = version {
+        header += &format!("9\n$ACADVER\n1\n{v}\n");
+    }
+    if let Some(u) = units {
+        header += &format!("9\n$INSUNITS\n70\n{u}\n");
+    }
+    header += "0\nENDSEC\n";
+    let after = starts.get(end + 2).copied().unwrap_or(bytes.len());
+    let mut out = bytes[..starts[begin]].to_vec();
+    out.extend_from_slice(header.as_bytes());
+    out.extend_from_slice(&bytes[after..]);
+    out
 }
 
 /// An error at the entity `e` with file handle `handle`.
@@ -280,6 +324,13 @@ fn read_piece(file: &str, block: &str, insert: &Entity, entities: &[Entity], han
     let (mut name, mut size) = (None, None);
     for e in entities {
         let layer = e.common.layer.trim();
+        let finite = match &e.specific {
+            EntityType::ModelPoint(p) => to_m([p.location.x, p.location.y]).iter().all(|c| c.is_finite()),
+            _ => polyline(e).is_none_or(|(pts, _)| pts.into_iter().map(to_m).flatten().all(f64::is_finite)),
+        };
+        if !finite {
+            return Err(at(e, "a coordinate is not a finite number (in metres)".into()));
+        }
         if let EntityType::Text(t) = &e.specific {
             if let Some((key, value)) = t.value.split_once(':') {
                 let value = value.trim();
