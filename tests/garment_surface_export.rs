@@ -110,3 +110,20 @@ fn obj_and_glb_read_back_with_groups_vertex_counts_and_pattern_uvs() {
     let times: Vec<f64> = summary.increments.iter().map(|r| r.time).collect();
     assert_eq!(v["pose_times"], serde_json::json!(times));
 }
+
+/// Groups of a multi-ply panel come in stack order, innermost first (as the ply ids), each
+/// with its ply's own nodes and quads.
+#[test]
+fn surface_groups_follow_the_stack() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("garments/nbc_sleeve.ron");
+    let (_, built) = scene::load(&path).unwrap_or_else(|e| panic!("{e}"));
+    let layout = built.garment.as_ref().expect("garment layout");
+    let model = &built.model;
+    let (mesh, nodes) = plyshell::garment::export::garment_surface(model, layout, |n| model.x0[n].into());
+    let names: Vec<&str> = mesh.groups.iter().map(|g| g.0.as_str()).collect();
+    assert_eq!(names, ["sleeve/liner", "sleeve/carbon", "sleeve/outer"]);
+    assert_eq!(nodes.len(), model.n_nodes());
+    for (_, quads) in &mesh.groups {
+        assert_eq!(quads.len(), model.elements.len() / 3);
+    }
+}

@@ -33,7 +33,7 @@ pub struct GarmentLayout {
 }
 
 /// The garment's quads as a textured surface for OBJ and glTF: one group `panel/ply` per
-/// ply of each panel (model part order), texture coordinates the flat pattern coordinates in
+/// ply of each panel (panel by panel, plies innermost first), texture coordinates the flat pattern coordinates in
 /// metres (a tiling print texture of 1 m × 1 m maps at true scale, along the pattern's axes),
 /// vertex positions from `position(node)`. Returns the surface and the model node of each
 /// vertex (garment nodes only, in node order).
@@ -43,17 +43,20 @@ pub fn garment_surface(model: &Model, layout: &GarmentLayout, position: impl Fn(
     for (v, &n) in nodes.iter().enumerate() {
         vertex[n] = v;
     }
-    let mut groups: Vec<(String, Vec<[usize; 4]>)> = Vec::new();
+    let mut tagged: Vec<((i32, i32), String, Vec<[usize; 4]>)> = Vec::new();
     for (pi, part) in model.parts.iter().enumerate() {
         let Some(&[panel, ply, _]) = layout.part_tags.get(pi) else { continue };
-        let (Some(panel), Some(ply)) = (layout.panels.get(panel as usize).filter(|_| panel >= 0), layout.plies.get(ply as usize).filter(|_| ply >= 0)) else { continue };
+        let (Some(panel_name), Some(ply_name)) = (layout.panels.get(panel as usize).filter(|_| panel >= 0), layout.plies.get(ply as usize).filter(|_| ply >= 0)) else { continue };
         let quads: Vec<[usize; 4]> = model.elements[part.first_element..part.first_element + part.n_elements]
             .iter()
             .map(|e| e.nodes.map(|n| vertex[n]))
             .filter(|q| q.iter().all(|&v| v != usize::MAX))
             .collect();
-        groups.push((format!("{panel}/{ply}"), quads));
+        tagged.push(((panel, ply), format!("{panel_name}/{ply_name}"), quads));
     }
+    // Panel by panel, plies in stack order (innermost first), as the ply ids.
+    tagged.sort_by_key(|t| t.0);
+    let groups: Vec<(String, Vec<[usize; 4]>)> = tagged.into_iter().map(|(_, name, quads)| (name, quads)).collect();
     let mesh = TexturedMesh {
         positions: nodes.iter().map(|&n| position(n)).collect(),
         uvs: nodes.iter().map(|&n| layout.pattern_uv[n].unwrap_or([0.0; 2])).collect(),

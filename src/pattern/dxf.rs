@@ -96,7 +96,8 @@ pub fn read_dxf_bytes(file: &str, bytes: &[u8], size: Option<&str>, units: Optio
         let Some(block) = drawing.blocks().find(|b| b.name == i.name) else {
             return Err(at_entity(file, Some(ins.common.handle.0), ins, format!("INSERT of block \"{}\", which the BLOCKS section does not define (a truncated file?)", i.name)));
         };
-        let own = handles.get(&block.name).map_or(&[][..], Vec::as_slice);
+        // The scan's entities must be the reader's, one for one; else no handles are named.
+        let own = handles.get(&block.name).filter(|h| h.len() == block.entities.len()).map_or(&[][..], Vec::as_slice);
         let piece = read_piece(file, &block.name, ins, &block.entities, own, [block.base_point.x, block.base_point.y], scale)?;
         pieces.push(piece);
     }
