@@ -516,6 +516,15 @@ fn a_missing_grain_line_and_an_unknown_layer_are_named() {
 }
 
 #[test]
+fn a_unitless_file_needs_its_units() {
+    let text = dxf(&[("A", piece("front", 0x100))]).replace("$INSUNITS\n70\n4", "$INSUNITS\n70\n0");
+    let e = read_dxf_bytes("unitless.dxf", text.as_bytes(), None, None).expect_err("unitless");
+    assert!(e.message.contains("$INSUNITS is Unitless") && e.message.contains("give the units"), "{e}");
+    let p = read_dxf_bytes("unitless.dxf", text.as_bytes(), None, Some(plyshell::garment::LengthUnit::Cm)).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(p[0].outline[2], [1.0, 1.0]);
+}
+
+#[test]
 fn duplicated_piece_names_are_rejected() {
     let e = read_dxf_bytes("dup.dxf", dxf(&[("A", piece("front", 0x100)), ("B", piece("front", 0x200))]).as_bytes(), None, None).expect_err("duplicate");
     assert!(e.message.contains("duplicated piece name \"front\"") && e.message.contains("F00"), "{e}");

@@ -148,3 +148,22 @@ fn a_three_ply_garment_deck_has_a_section_per_ply_and_sets() {
     println!("{report:?}");
     assert!(report.links_dropped > 0, "the stitch lines' rigid links cannot be written as equations and are reported");
 }
+
+/// `plyshell export SCENE --inp DECK` writes the deck and says what it holds.
+#[test]
+fn the_export_command_writes_the_deck() {
+    let dir = out_dir("inp_cli");
+    let deck = dir.join("two_panel_seam.inp");
+    let o = Command::new(env!("CARGO_BIN_EXE_plyshell"))
+        .arg("export")
+        .arg(concat!(env!("CARGO_MANIFEST_DIR"), "/garments/examples/two_panel_seam.ron"))
+        .arg("--inp")
+        .arg(&deck)
+        .output()
+        .expect("plyshell export");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let said = String::from_utf8_lossy(&o.stdout);
+    assert!(said.contains("110 nodes, 80 S4 elements, 2 sections, 15 equations, 1 steps"), "{said}");
+    let text = std::fs::read_to_string(&deck).expect("deck written");
+    assert!(text.starts_with("*HEADING") && text.trim_end().ends_with("*END STEP"));
+}
