@@ -81,6 +81,7 @@ pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &m
     // positions at every exported state (the glTF pose series).
     let surface_nodes: Option<Vec<usize>> = built.garment.as_ref().map(|l| crate::garment::export::garment_surface(model, l, |_| [0.0; 3]).1);
     let mut poses: Vec<(f64, Vec<[f64; 3]>)> = Vec::new();
+    let mut poses_dropped = 0usize;
     let mut export_s = 0.0;
     let mut io_error: Option<String> = None;
     let mut mode_files: Vec<String> = Vec::new();
@@ -115,7 +116,11 @@ pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &m
                         Err(e) => io_error = io_error.take().or(Some(e.to_string())),
                     }
                     if let Some(nodes) = &surface_nodes {
-                        poses.push((report.time, nodes.iter().map(|&n| model.position(st, n).into()).collect()));
+                        if (poses.len() + 1) * nodes.len() <= MAX_POSE_VERTICES {
+                            poses.push((report.time, nodes.iter().map(|&n| model.position(st, n).into()).collect()));
+                        } else {
+                            poses_dropped += 1;
+                        }
                     }
                 }
                 export_s += t.elapsed().as_secs_f64();
@@ -186,6 +191,9 @@ pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &m
                 Ok(()) => summary.files.push(gpvd),
                 Err(e) => problems.push(format!("{gpvd}: {e}")),
             }
+            if poses_dropped > 0 {
+                problems.push(format!("{}_garment.glb: {poses_dropped} later states left out of the pose series (at most {MAX_POSE_VERTICES} vertex positions are kept)", scene.name));
+            }
             if let Some(layout) = &built.garment {
                 for (name, e) in write_surfaces(dir, &scene.name, model, &state, layout, &poses) {
                     match e {
@@ -250,6 +258,9 @@ fn write_monitor_plot(dir: &Path, scene: &Scene, built: &BuiltScene, summary: &S
     plot::plot_xy(&dir.join(&name), &scene.name, &x_label, "displacement", &series, false, false).map_err(|e| e.to_string())?;
     Ok(Some(name))
 }
+
+/// Most vertex positions (poses × garment nodes, 24 bytes each) kept for the glTF pose series.
+const MAX_POSE_VERTICES: usize = 5_000_000;
 
 /// Writes the garment's final state as `NAME_garment.obj` and, with the pose series `poses`
 /// (time, vertex positions) as morph targets, `NAME_garment.glb`; returns each file name with

@@ -3,7 +3,10 @@
 //! part, `*NSET`/`*ELSET` per part and for further named sets, one `*MATERIAL` (`*ELASTIC`,
 //! isotropic) and `*SHELL SECTION` per section (each ply of a panel is a part of its own),
 //! seams and other ties as `*EQUATION`, supports as `*BOUNDARY`, and one `*STEP` per solution
-//! step with its loads as `*CLOAD` (`OP=NEW`, the totals at the step's end).
+//! step with its loads as `*CLOAD` (`OP=NEW`, the totals at the step's end) and prescribed
+//! translations as `*BOUNDARY`: `*STATIC` for linear steps, `*BUCKLE` for buckling steps, and
+//! `*STEP, NLGEOM` with `*STATIC` at the step's increment for every other kind (arc-length and
+//! pseudo-transient steps have no counterpart here).
 //!
 //! What a deck cannot say the same way is written as a comment and counted in
 //! [`InpReport`]: tie offsets that sew a gap closed (the equations tie the reference gap),
