@@ -7,7 +7,7 @@
 //!
 //! | layer | meaning | read as |
 //! |---|---|---|
-//! | 1 | boundary (cut) line, and the piece's TEXT (`Piece Name:`, `Size:`, …) | closed POLYLINE / LWPOLYLINE → outline |
+//! | 1 | boundary (cut) line, and the piece's TEXT or MTEXT (`Piece Name:`, `Size:`, …; read on any layer) | closed POLYLINE / LWPOLYLINE → outline |
 //! | 4 | notches (also 80–83: T, castle, check and U notches) | LINE (the end nearer the boundary) or POINT → outline vertices |
 //! | 7 | grain line | LINE or 2-vertex polyline → `grain` (first → second point) |
 //! | 8 | internal lines | LINE / polylines → stitch lines |
@@ -332,8 +332,13 @@ fn read_piece(file: &str, block: &str, insert: &Entity, entities: &[Entity], han
         if !finite {
             return Err(at(e, "a coordinate is not a finite number (in metres)".into()));
         }
-        if let EntityType::Text(t) = &e.specific {
-            if let Some((key, value)) = t.value.split_once(':') {
+        let text = match &e.specific {
+            EntityType::Text(t) => Some(t.value.as_str()),
+            EntityType::MText(t) => Some(t.text.as_str()),
+            _ => None,
+        };
+        if let Some(text) = text {
+            if let Some((key, value)) = text.split_once(':') {
                 let value = value.trim();
                 match key.trim().to_ascii_lowercase().as_str() {
                     "piece name" => name = Some(value.to_string()),
@@ -427,8 +432,9 @@ fn read_piece(file: &str, block: &str, insert: &Entity, entities: &[Entity], han
     if signed_area2(&outline) < 0.0 {
         outline[1..].reverse();
     }
-    let extent = outline.iter().fold(0.0f64, |m, p| m.max(p[0].abs()).max(p[1].abs()));
-    let tol = 1e-3 * extent.max(1e-3);
+    // Notch tolerance: a thousandth of the piece's larger bounding-box side (1 mm on 1 m).
+    let (lo, hi) = outline.iter().fold(([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]), |(lo, hi), p| ([lo[0].min(p[0]), lo[1].min(p[1])], [hi[0].max(p[0]), hi[1].max(p[1])]));
+    let tol = 1e-3 * (hi[0] - lo[0]).max(hi[1] - lo[1]);
     // Notch positions on the boundary: the notch point nearest to it.
     let mut marks: Vec<(usize, f64, &Entity)> = Vec::new();
     for (e, pts) in &notches {
