@@ -5,6 +5,7 @@ use std::time::Instant;
 
 use crate::io::export::{write_state_vtu, ExportOptions};
 use crate::io::{plot, pvd};
+use crate::model::{Model, State};
 use crate::results::{peak_memory_mib, MonitorHistory, Sizes, Summary};
 use crate::scene::{BuiltScene, Scene};
 use crate::solver::{Progress, SolveError, Solver};
@@ -76,6 +77,11 @@ pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &m
     let mut pvd_entries: Vec<(f64, String)> = Vec::new();
     let mut garment_entries: Vec<(f64, String)> = Vec::new();
     let garment_export = !built.seams.is_empty() || built.garment.is_some();
+    // The garment's textured surface (OBJ, glTF): its vertices' model nodes, and their
+    // positions at every exported state (the glTF pose series).
+    let surface_nodes: Option<Vec<usize>> = built.garment.as_ref().map(|l| crate::garment::export::garment_surface(model, l, |_| [0.0; 3]).1);
+    let mut poses: Vec<(f64, Vec<[f64; 3]>)> = Vec::new();
+    let mut poses_dropped = 0usize;
     let mut export_s = 0.0;
     let mut io_error: Option<String> = None;
     let mut mode_files: Vec<String> = Vec::new();
@@ -108,6 +114,13 @@ pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &m
                     match crate::garment::export::write_garment_vtu(&dir.join(&gname), model, Some(st), built.garment.as_ref(), &built.seams, forces, export.binary) {
                         Ok(()) => garment_entries.push((report.time, gname)),
                         Err(e) => io_error = io_error.take().or(Some(e.to_string())),
+                    }
+                    if let Some(nodes) = &surface_nodes {
+                        if (poses.len() + 1) * nodes.len() <= MAX_POSE_VERTICES {
+                            poses.push((report.time, nodes.iter().map(|&n| model.position(st, n).into()).collect()));
+                        } else {
+                            poses_dropped += 1;
+                        }
                     }
                 }
                 export_s += t.elapsed().as_secs_f64();
@@ -178,6 +191,17 @@ pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &m
                 Ok(()) => summary.files.push(gpvd),
                 Err(e) => problems.push(format!("{gpvd}: {e}")),
             }
+            if poses_dropped > 0 {
+                problems.push(format!("{}_garment.glb: {poses_dropped} later states left out of the pose series (at most {MAX_POSE_VERTICES} vertex positions are kept)", scene.name));
+            }
+            if let Some(layout) = &built.garment {
+                for (name, e) in write_surfaces(dir, &scene.name, model, &state, layout, &poses) {
+                    match e {
+                        None => summary.files.push(name),
+                        Some(e) => problems.push(format!("{name}: {e}")),
+                    }
+                }
+            }
         }
         let plotted = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| write_monitor_plot(dir, scene, built, &summary)));
         match plotted {
@@ -233,4 +257,42 @@ fn write_monitor_plot(dir: &Path, scene: &Scene, built: &BuiltScene, summary: &S
     let x_label = format!("load scale '{}'", built.model.loads[li].name);
     plot::plot_xy(&dir.join(&name), &scene.name, &x_label, "displacement", &series, false, false).map_err(|e| e.to_string())?;
     Ok(Some(name))
+}
+
+/// Most vertex positions (poses × garment nodes, 24 bytes each) kept for the glTF pose series.
+const MAX_POSE_VERTICES: usize = 5_000_000;
+
+/// Writes the garment's final state as `NAME_garment.obj` and, with the pose series `poses`
+/// (time, vertex positions) as morph targets, `NAME_garment.glb`; returns each file name with
+/// its error, if any.
+fn write_surfaces(dir: &Path, name: &str, model: &Model, state: &State, layout: &crate::garment::export::GarmentLayout, poses: &[(f64, Vec<[f64; 3]>)]) -> Vec<(String, Option<String>)> {
+    let (mesh, _) = crate::garment::export::garment_surface(model, layout, |n| model.position(state, n).into());
+    let comment = [format!("plyshell garment '{name}': final state; one group per panel/ply; vt = flat pattern coordinates (m)")];
+    let obj = format!("{name}_garment.obj");
+    let obj_err = crate::io::obj::write_obj(&dir.join(&obj), &mesh, &comment).err().map(|e| e.to_string());
+    let glb = format!("{name}_garment.glb");
+    let (times, frames): (Vec<f64>, Vec<Vec<[f64; 3]>>) = poses.iter().cloned().unzip();
+    let generator = concat!("plyshell ", env!("CARGO_PKG_VERSION"));
+    let glb_err = crate::io::gltf::write_glb(&dir.join(&glb), &mesh, &frames, &times, generator).err().map(|e| e.to_string());
+    vec![(obj, obj_err), (glb, glb_err)]
+}
+
+/// The CalculiX / Abaqus deck of a built scene: besides the parts, its node sets (`N_name`),
+/// both sides of every seam (`SEAM_name_A` master, `SEAM_name_B` slave) and, for a garment,
+/// the elements of each panel across its plies (`PANEL_name`).
+pub fn inp_deck<'a>(scene: &Scene, built: &'a BuiltScene) -> crate::io::inp::InpDeck<'a> {
+    let model = &built.model;
+    let mut node_sets: Vec<(String, Vec<usize>)> = built.node_sets.iter().map(|(k, v)| (format!("N_{k}"), v.clone())).collect();
+    for s in &built.seams {
+        node_sets.push((format!("SEAM_{}_A", s.name), s.master.clone()));
+        node_sets.push((format!("SEAM_{}_B", s.name), s.slave.clone()));
+    }
+    let mut element_sets = Vec::new();
+    if let Some(l) = &built.garment {
+        for (p, name) in l.panels.iter().enumerate() {
+            let elements: Vec<usize> = (0..model.elements.len()).filter(|&e| l.part_tags.get(model.elements[e].part).is_some_and(|t| t[0] == p as i32)).collect();
+            element_sets.push((format!("PANEL_{name}"), elements));
+        }
+    }
+    crate::io::inp::InpDeck { heading: format!("plyshell scene '{}': {}", scene.name, scene.description), model, steps: &built.steps, node_sets, element_sets }
 }

@@ -415,12 +415,13 @@ pub fn run(cfg: &FuzzConfig) -> std::io::Result<FuzzReport> {
         .iter()
         .map(|p| {
             let bytes = std::fs::read(p)?;
-            // Mesh files beside the scene (read by OBJ parts and TriMesh bodies).
+            // Mesh and pattern files beside the scene (read by OBJ parts, TriMesh bodies and
+            // garment patterns).
             let mut meshes = Vec::new();
             if let Some(dir) = p.parent() {
                 for e in std::fs::read_dir(dir)?.flatten() {
                     let name = e.file_name().to_string_lossy().into_owned();
-                    if name.ends_with(".obj") || name.ends_with(".stl") {
+                    if name.ends_with(".obj") || name.ends_with(".stl") || name.ends_with(".dxf") {
                         meshes.push((name, std::fs::read(e.path())?));
                     }
                 }

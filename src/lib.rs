@@ -30,5 +30,6 @@ pub mod results;
 pub mod bench;
 pub mod contact;
 pub mod garment;
+pub mod pattern;
 pub mod budget;
 pub mod fuzz;

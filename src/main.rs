@@ -1,4 +1,5 @@
-//! Command line: `plyshell solve`, `plyshell demo`, `plyshell check`, `plyshell bench`.
+//! Command line: `plyshell solve`, `plyshell demo`, `plyshell check`, `plyshell import`, `plyshell export`,
+//! `plyshell bench`.
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -96,6 +97,29 @@ enum Command {
         #[arg(long, default_value_t = 20.0)]
         solve_timeout: f64,
     },
+    /// Export the assembled model of a scene: `--inp` writes a CalculiX / Abaqus input deck.
+    Export {
+        /// Scene file (RON).
+        scene: PathBuf,
+        /// CalculiX / Abaqus input deck to write (.inp).
+        #[arg(long)]
+        inp: PathBuf,
+    },
+    /// Import a pattern (DXF, AAMA / ASTM D6673 layers) as a scene file: one panel per piece
+    /// with its outline, notch edge spans (N1-N2, …) and grain.
+    Import {
+        /// Pattern file (.dxf).
+        pattern: PathBuf,
+        /// Scene file to write (RON).
+        #[arg(long)]
+        out: PathBuf,
+        /// Size to take from a graded file.
+        #[arg(long)]
+        size: Option<String>,
+        /// Drawing units (mm, cm, m, in), overriding the header's $INSUNITS.
+        #[arg(long, value_parser = parse_unit)]
+        units: Option<plyshell::garment::LengthUnit>,
+    },
     /// Run the verification benchmarks at several mesh sizes: table, JSON and error-vs-time plot.
     Bench {
         /// Write the records as JSON here (the plot goes beside it as .svg).
@@ -119,6 +143,8 @@ fn main() -> ExitCode {
             .map_err(|e| e.to_string())
             .and_then(|(s, b)| solve(&s, &b, &out, false)),
         Command::Check { scene } => scene::load(&scene).map_err(|e| e.to_string()).map(|(s, b)| check(&s, &b)),
+        Command::Export { scene, inp } => scene::load(&scene).map_err(|e| e.to_string()).and_then(|(s, b)| export_inp(&s, &b, &inp)),
+        Command::Import { pattern, out, size, units } => import(&pattern, &out, size.as_deref(), units),
         Command::Bench { json, quick } => bench::run_all(&json, quick).map_err(|e| e.to_string()),
         Command::Fuzz { corpus, seed, count, solve_every, jobs, work, check_timeout, solve_timeout } => {
             fuzz(corpus, seed, count, solve_every, jobs, work, check_timeout, solve_timeout)
@@ -158,6 +184,49 @@ fn fuzz(corpus: PathBuf, seed: u64, count: usize, solve_every: usize, jobs: usiz
     let report = fuzz::run(&cfg).map_err(|e| e.to_string())?;
     say!("{report}");
     if report.failures.is_empty() { Ok(()) } else { Err(format!("{} failing mutants", report.failures.len())) }
+}
+
+/// A length unit from its symbol.
+fn parse_unit(s: &str) -> Result<plyshell::garment::LengthUnit, String> {
+    use plyshell::garment::LengthUnit;
+    match s {
+        "mm" => Ok(LengthUnit::Mm),
+        "cm" => Ok(LengthUnit::Cm),
+        "m" => Ok(LengthUnit::M),
+        "in" => Ok(LengthUnit::In),
+        _ => Err(format!("unknown unit \"{}\"; expected mm, cm, m or in", s.escape_debug())),
+    }
+}
+
+fn import(pattern: &Path, out: &Path, size: Option<&str>, units: Option<plyshell::garment::LengthUnit>) -> Result<(), String> {
+    let pieces = plyshell::pattern::dxf::read_dxf(pattern, size, units).map_err(|e| e.to_string())?;
+    let name = pattern.file_stem().map_or("pattern".into(), |s| s.to_string_lossy().into_owned());
+    let text = plyshell::pattern::scene_ron(&name, &pattern.display().to_string(), &pieces);
+    plyshell::io::atomic::write_atomic(out, text.as_bytes()).map_err(|e| format!("{}: {e}", out.display()))?;
+    for p in &pieces {
+        say!("piece \"{}\"{}: {} outline vertices, {} notches, {} internal lines", p.name, p.size.as_ref().map(|s| format!(" (size {s})")).unwrap_or_default(), p.outline.len(), p.notches.len(), p.internal_lines.len());
+    }
+    say!("wrote {}", out.display());
+    Ok(())
+}
+
+fn export_inp(scene: &Scene, built: &BuiltScene, path: &Path) -> Result<(), String> {
+    let deck = analysis::inp_deck(scene, built);
+    let r = plyshell::io::inp::write_inp(path, &deck).map_err(|e| e.to_string())?;
+    say!("wrote {}: {} nodes, {} S4 elements, {} sections, {} equations, {} steps", path.display(), built.model.n_nodes(), built.model.elements.len(), built.model.sections.len(), r.equations, built.steps.len());
+    if r.offsets_dropped > 0 {
+        warn!("warning: {} tied DOFs close a gap (sewing) in plyshell; the deck ties the reference gap", r.offsets_dropped);
+    }
+    if r.links_dropped > 0 {
+        warn!("warning: {} through-thickness rigid links (ply stacks, stitch lines) are not in the deck", r.links_dropped);
+    }
+    if r.single_tilts_free > 0 {
+        warn!("warning: {} nodes with a single fixed director tilt have free rotations in the deck", r.single_tilts_free);
+    }
+    if r.materials_approximated > 0 {
+        warn!("warning: {} sections of non-isotropic materials are written with their small-strain isotropic E and nu", r.materials_approximated);
+    }
+    Ok(())
 }
 
 fn check(scene: &Scene, built: &BuiltScene) {

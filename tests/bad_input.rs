@@ -441,3 +441,151 @@ fn a_reference_written_with_a_unicode_escape_is_located() {
     assert_eq!(e.field, "parts[strip].material", "{e}");
     assert_eq!(e.line, line_of(&text, "st\\u{1e6}el"), "{e}");
 }
+
+// ---------------------------------------------------------------------------------------
+// Pattern files (DXF, AAMA / ASTM D6673 layers): malformed files give an error naming the
+// file, the entity's handle and layer, and what was expected; never a panic.
+
+use plyshell::pattern::dxf::{read_dxf, read_dxf_bytes};
+
+/// A DXF (R2000, millimetres) with one block per `(block name, entities)` and an INSERT of
+/// each in the ENTITIES section. Entities are group-code text.
+fn dxf(blocks: &[(&str, String)]) -> String {
+    let mut t = String::from("0\nSECTION\n2\nHEADER\n9\n$ACADVER\n1\nAC1015\n9\n$INSUNITS\n70\n4\n0\nENDSEC\n0\nSECTION\n2\nBLOCKS\n");
+    for (name, body) in blocks {
+        t += &format!("0\nBLOCK\n5\n1{name}\n8\n0\n2\n{name}\n70\n0\n10\n0.0\n20\n0.0\n30\n0.0\n3\n{name}\n");
+        t += body;
+        t += "0\nENDBLK\n8\n0\n";
+    }
+    t += "0\nENDSEC\n0\nSECTION\n2\nENTITIES\n";
+    for (k, (name, _)) in blocks.iter().enumerate() {
+        t += &format!("0\nINSERT\n5\n{:X}\n8\n0\n2\n{name}\n10\n0.0\n20\n0.0\n30\n0.0\n", 0xF00 + k);
+    }
+    t + "0\nENDSEC\n0\nEOF\n"
+}
+
+/// A closed (or open) LWPOLYLINE with handle `h` on `layer`.
+fn lwpolyline(h: &str, layer: &str, pts: &[[f64; 2]], closed: bool) -> String {
+    let mut t = format!("0\nLWPOLYLINE\n5\n{h}\n100\nAcDbEntity\n8\n{layer}\n100\nAcDbPolyline\n90\n{}\n70\n{}\n", pts.len(), i32::from(closed));
+    for p in pts {
+        t += &format!("10\n{}\n20\n{}\n", p[0], p[1]);
+    }
+    t
+}
+
+fn line(h: &str, layer: &str, a: [f64; 2], b: [f64; 2]) -> String {
+    format!("0\nLINE\n5\n{h}\n100\nAcDbEntity\n8\n{layer}\n100\nAcDbLine\n10\n{}\n20\n{}\n30\n0.0\n11\n{}\n21\n{}\n31\n0.0\n", a[0], a[1], b[0], b[1])
+}
+
+fn text(h: &str, value: &str) -> String {
+    format!("0\nTEXT\n5\n{h}\n100\nAcDbEntity\n8\n1\n100\nAcDbText\n10\n10.0\n20\n10.0\n30\n0.0\n40\n5.0\n1\n{value}\n")
+}
+
+const SQUARE: [[f64; 2]; 4] = [[0.0, 0.0], [100.0, 0.0], [100.0, 100.0], [0.0, 100.0]];
+
+fn piece(name: &str, h: u32) -> String {
+    lwpolyline(&format!("{:X}", h), "1", &SQUARE, true) + &line(&format!("{:X}", h + 1), "7", [50.0, 10.0], [50.0, 90.0]) + &text(&format!("{:X}", h + 2), &format!("Piece Name: {name}"))
+}
+
+#[test]
+fn a_well_formed_hand_written_dxf_reads() {
+    let p = read_dxf_bytes("ok.dxf", dxf(&[("A", piece("front", 0x100))]).as_bytes(), None, None).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(p.len(), 1);
+    assert_eq!(p[0].name, "front");
+    assert_eq!(p[0].outline, vec![[0.0, 0.0], [0.1, 0.0], [0.1, 0.1], [0.0, 0.1]]);
+}
+
+#[test]
+fn an_open_boundary_names_its_handle_and_layer() {
+    let body = lwpolyline("2A", "1", &SQUARE, false) + &line("2B", "7", [50.0, 10.0], [50.0, 90.0]);
+    let e = read_dxf_bytes("open.dxf", dxf(&[("A", body)]).as_bytes(), None, None).expect_err("open boundary");
+    assert_eq!((e.handle, e.layer.as_deref()), (Some(0x2A), Some("1")), "{e}");
+    let s = e.to_string();
+    assert!(s.starts_with("open.dxf: entity 2A (layer \"1\"): block \"A\": the boundary is open: its ends are 100.000 mm apart"), "{s}");
+}
+
+#[test]
+fn a_missing_grain_line_and_an_unknown_layer_are_named() {
+    let body = lwpolyline("2A", "1", &SQUARE, true);
+    let e = read_dxf_bytes("nograin.dxf", dxf(&[("A", body)]).as_bytes(), None, None).expect_err("no grain");
+    assert!(e.message.contains("no grain line: expected a LINE on layer 7") && e.handle == Some(0xF00), "{e}");
+    let body = piece("front", 0x100) + &line("3C", "CUT", [0.0, 0.0], [1.0, 1.0]);
+    let e = read_dxf_bytes("layer.dxf", dxf(&[("A", body)]).as_bytes(), None, None).expect_err("unknown layer");
+    assert_eq!((e.handle, e.layer.as_deref()), (Some(0x3C), Some("CUT")), "{e}");
+    assert!(e.message.contains("unknown layer \"CUT\"") && e.message.contains("AAMA / ASTM D6673"), "{e}");
+}
+
+#[test]
+fn a_unitless_file_needs_its_units() {
+    let text = dxf(&[("A", piece("front", 0x100))]).replace("$INSUNITS\n70\n4", "$INSUNITS\n70\n0");
+    let e = read_dxf_bytes("unitless.dxf", text.as_bytes(), None, None).expect_err("unitless");
+    assert!(e.message.contains("$INSUNITS is Unitless") && e.message.contains("give the units"), "{e}");
+    let p = read_dxf_bytes("unitless.dxf", text.as_bytes(), None, Some(plyshell::garment::LengthUnit::Cm)).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(p[0].outline[2], [1.0, 1.0]);
+}
+
+#[test]
+fn duplicated_piece_names_are_rejected() {
+    let e = read_dxf_bytes("dup.dxf", dxf(&[("A", piece("front", 0x100)), ("B", piece("front", 0x200))]).as_bytes(), None, None).expect_err("duplicate");
+    assert!(e.message.contains("duplicated piece name \"front\"") && e.message.contains("F00"), "{e}");
+    assert_eq!(e.handle, Some(0xF01));
+}
+
+#[test]
+fn a_notch_off_the_boundary_is_rejected() {
+    let body = piece("front", 0x100) + &line("4D", "4", [50.0, 50.0], [51.0, 50.0]);
+    let e = read_dxf_bytes("notch.dxf", dxf(&[("A", body)]).as_bytes(), None, None).expect_err("notch inside");
+    assert_eq!((e.handle, e.layer.as_deref()), (Some(0x4D), Some("4")), "{e}");
+    assert!(e.message.contains("from the boundary"), "{e}");
+}
+
+#[test]
+fn truncated_empty_and_garbage_files_are_errors_not_panics() {
+    let good = dxf(&[("A", piece("front", 0x100))]);
+    for cut in [good.len() / 4, good.len() / 2, good.len() * 3 / 4, good.len() - 8] {
+        let e = read_dxf_bytes("cut.dxf", &good.as_bytes()[..cut], None, None).expect_err("truncated");
+        println!("truncated at {cut}: {e}");
+        assert!(e.to_string().starts_with("cut.dxf: "), "{e}");
+    }
+    let shipped = std::fs::read(concat!(env!("CARGO_MANIFEST_DIR"), "/garments/patterns/two_piece.dxf")).expect("shipped dxf");
+    for cut in [shipped.len() / 3, shipped.len() * 2 / 3] {
+        let e = read_dxf_bytes("two_piece_cut.dxf", &shipped[..cut], None, None).expect_err("truncated");
+        println!("shipped truncated at {cut}: {e}");
+    }
+    let e = read_dxf_bytes("empty.dxf", b"", None, None).expect_err("empty");
+    assert!(e.message.contains("empty"), "{e}");
+    let mut x: u64 = 0x9E37_79B9_7F4A_7C15;
+    let garbage: Vec<u8> = (0..4096)
+        .map(|_| {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            (x >> 24) as u8
+        })
+        .collect();
+    let e = read_dxf_bytes("garbage.dxf", &garbage, None, None).expect_err("garbage");
+    println!("garbage: {e}");
+    assert!(e.to_string().starts_with("garbage.dxf: "), "{e}");
+    let e = read_dxf(std::path::Path::new("/nonexistent/pattern.dxf"), None, None).expect_err("missing file");
+    assert!(e.to_string().starts_with("/nonexistent/pattern.dxf: cannot read the pattern file"), "{e}");
+}
+
+#[test]
+fn a_garment_pattern_error_is_located_at_the_pattern_field() {
+    let text = GOOD.replace("    steps:", "    garment: Some((element_size: 0.05, pattern: Some(Dxf(file: \"missing.dxf\")), plies: {\"p\": (material: \"steel\", thickness: 0.01)}, panels: [(name: \"front\", plies: [\"p\"])])),\n    steps:");
+    let e = error_of(&text);
+    assert_eq!(e.field, "garment.pattern");
+    assert_eq!(e.line, line_of(&text, "pattern:"), "{e}");
+    assert!(e.message.contains("missing.dxf: cannot read the pattern file"), "{e}");
+    // A panel without outline that names no piece of the file.
+    let dir = std::env::temp_dir().join(format!("plyshell_bad_pattern_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    std::fs::write(dir.join("one.dxf"), dxf(&[("A", piece("back", 0x100))])).expect("write");
+    let text = text.replace("missing.dxf", "one.dxf");
+    let file = dir.join("scene.ron");
+    std::fs::write(&file, &text).expect("write");
+    let e = scene::load(&file).expect_err("no such piece");
+    assert_eq!(e.field, "garment.panels[front].outline");
+    assert!(e.message.contains("no piece of that name; its pieces: back"), "{e}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -118,6 +118,12 @@ for pvd in sys.argv[2:]:
         if "ply" in m.cell_data:
             res["plies"] = sorted(set(int(v) for v in m.cell_data["ply"][0]))
             res["materials"] = sorted(set(int(v) for v in m.cell_data["material"][0]))
+            res["ply_names"] = bytes(m.field_data["ply_names"].astype("uint8")).decode().split("\0")[:-1]
+            res["ply_thickness"] = m.field_data["ply_thickness"].tolist()
+            quads = m.cells[0].data
+            r = (m.points[:, 0] ** 2 + m.points[:, 1] ** 2) ** 0.5
+            ply = m.cell_data["ply"][0]
+            res["radius_by_ply"] = [float(r[quads[ply == k]].mean()) for k in sorted(set(ply.tolist()))]
     res[pvd] = cells
 print(json.dumps(res))
 "#;
@@ -164,4 +170,27 @@ fn nbc_sleeve_solves_end_to_end() {
     assert_eq!(v["nbc_sleeve_garment.pvd"][3]["line"], 60);
     assert_eq!(v["plies"], serde_json::json!([0, 1, 2]));
     assert_eq!(v["materials"], serde_json::json!([0, 1, 2]));
+    // Ply ids follow the stack, innermost first (issue 19), with names and thicknesses as
+    // field data; the mean radius of each ply's nodes grows with its id.
+    assert_eq!(v["ply_names"], serde_json::json!(["liner", "carbon", "outer"]));
+    assert_eq!(v["ply_thickness"], serde_json::json!([0.0003, 0.0015, 0.0004]));
+    let r: Vec<f64> = v["radius_by_ply"].as_array().expect("radii").iter().filter_map(|x| x.as_f64()).collect();
+    println!("mean radius by ply id {r:?}");
+    assert!(r.len() == 3 && r[0] < r[1] && r[1] < r[2], "{r:?}");
+}
+
+/// Stack order of plies from several panels, innermost first.
+#[test]
+fn plies_are_numbered_in_stack_order() {
+    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/garments/nbc_sleeve.ron")).expect("nbc_sleeve.ron");
+    let sc = scene::parse("nbc_sleeve.ron", &text).unwrap_or_else(|e| panic!("{e}"));
+    let mut g = sc.garment.expect("a garment");
+    assert_eq!(g.plies_in_stack_order(), ["liner", "carbon", "outer"]);
+    // A second panel without the carbon layer, and an unused ply, keep the order.
+    let mut p = g.panels[0].clone();
+    p.name = "hood".into();
+    p.plies = vec!["outer".into(), "liner".into()];
+    g.panels.insert(0, p);
+    g.plies.insert("a_spare".into(), g.plies["liner"].clone());
+    assert_eq!(g.plies_in_stack_order(), ["liner", "carbon", "outer", "a_spare"]);
 }

@@ -257,11 +257,13 @@ impl GarmentMesh {
         Ok((ties, infos))
     }
 
-    /// Export layout: ids of panels, plies and materials per model part (garment parts start
-    /// at model part `first_part`), and the flat pattern laid out panel beside panel (gap of
+    /// Export layout: ids of panels, plies (in stack order, innermost first, see
+    /// [`GarmentSpec::plies_in_stack_order`]) and materials per model part (garment parts
+    /// start at model part `first_part`), each ply's thickness, and the flat pattern laid out panel beside panel (gap of
     /// a tenth of the largest panel) with ply k shifted by −k·(that gap) in z.
     pub fn layout(&self, spec: &GarmentSpec, first_part: usize, first_node: &[usize], n_nodes: usize) -> super::export::GarmentLayout {
-        let plies: Vec<String> = spec.plies.keys().cloned().collect();
+        let plies = spec.plies_in_stack_order();
+        let ply_thickness = plies.iter().map(|p| spec.plies.get(p).map_or(0.0, |x| x.thickness)).collect();
         let mut materials: Vec<String> = spec.plies.values().map(|p| p.material.clone()).collect();
         materials.sort();
         materials.dedup();
@@ -285,15 +287,19 @@ impl GarmentMesh {
             x += hi[0] - lo[0] + gap;
         }
         let mut flat = vec![None; n_nodes];
+        let mut pattern_uv = vec![None; n_nodes];
         for (gp, &f) in self.parts.iter().zip(first_node) {
             let pat = &self.patterns[gp.panel];
             for (n, uv) in pat.uv.iter().enumerate() {
                 if let Some(slot) = flat.get_mut(f + n) {
                     *slot = Some([uv[0] + shift[gp.panel][0], uv[1] + shift[gp.panel][1], -(gp.ply as f64) * gap]);
                 }
+                if let Some(slot) = pattern_uv.get_mut(f + n) {
+                    *slot = Some(*uv);
+                }
             }
         }
-        super::export::GarmentLayout { panels: spec.panels.iter().map(|p| p.name.clone()).collect(), plies, materials, part_tags, flat }
+        super::export::GarmentLayout { panels: spec.panels.iter().map(|p| p.name.clone()).collect(), plies, ply_thickness, materials, part_tags, flat, pattern_uv }
     }
 
     /// Warnings for seams that look sewn crossed: with each side's row as given (`reversed`),

@@ -1,12 +1,14 @@
 //! Garment export: quads tagged with panel, ply and material ids, and seams as line cells
-//! carrying their force per unit length; in 3D (a model state) or as the flat pattern.
+//! carrying their force per unit length; in 3D (a model state) or as the flat pattern; and
+//! the garment as a textured surface (groups per panel and ply, UVs from the pattern).
 
 use std::path::Path;
 
 use nalgebra::Vector3;
 
 use super::SeamInfo;
-use crate::io::vtu::{write_vtu, DataArray, VtuMesh};
+use crate::io::surface::TexturedMesh;
+use crate::io::vtu::{write_vtu, DataArray, FieldValues, VtuMesh};
 use crate::model::{Model, State};
 
 /// Names and ids of the garment's panels, plies and materials, per model part and node.
@@ -14,8 +16,10 @@ use crate::model::{Model, State};
 pub struct GarmentLayout {
     /// Panel names (id = index).
     pub panels: Vec<String>,
-    /// Ply names (id = index).
+    /// Ply names (id = index), in stack order, innermost first.
     pub plies: Vec<String>,
+    /// Thickness of each ply (m), by ply id.
+    pub ply_thickness: Vec<f64>,
     /// Material names (id = index).
     pub materials: Vec<String>,
     /// (panel, ply, material) ids of each model part; −1 for parts outside the garment.
@@ -23,13 +27,51 @@ pub struct GarmentLayout {
     /// Flat-pattern position of each model node laid out for export (panels side by side,
     /// plies stacked below), or None for nodes outside the garment.
     pub flat: Vec<Option<[f64; 3]>>,
+    /// Pattern coordinates (u, v) of each model node in its panel's flat pattern (m), or None
+    /// for nodes outside the garment.
+    pub pattern_uv: Vec<Option<[f64; 2]>>,
+}
+
+/// The garment's quads as a textured surface for OBJ and glTF: one group `panel/ply` per
+/// ply of each panel (panel by panel, plies innermost first), texture coordinates the flat pattern coordinates in
+/// metres (a tiling print texture of 1 m × 1 m maps at true scale, along the pattern's axes),
+/// vertex positions from `position(node)`. Returns the surface and the model node of each
+/// vertex (garment nodes only, in node order).
+pub fn garment_surface(model: &Model, layout: &GarmentLayout, position: impl Fn(usize) -> [f64; 3]) -> (TexturedMesh, Vec<usize>) {
+    let nodes: Vec<usize> = (0..model.n_nodes()).filter(|&n| layout.pattern_uv.get(n).copied().flatten().is_some()).collect();
+    let mut vertex = vec![usize::MAX; model.n_nodes()];
+    for (v, &n) in nodes.iter().enumerate() {
+        vertex[n] = v;
+    }
+    let mut tagged: Vec<((i32, i32), String, Vec<[usize; 4]>)> = Vec::new();
+    for (pi, part) in model.parts.iter().enumerate() {
+        let Some(&[panel, ply, _]) = layout.part_tags.get(pi) else { continue };
+        let (Some(panel_name), Some(ply_name)) = (layout.panels.get(panel as usize).filter(|_| panel >= 0), layout.plies.get(ply as usize).filter(|_| ply >= 0)) else { continue };
+        let quads: Vec<[usize; 4]> = model.elements[part.first_element..part.first_element + part.n_elements]
+            .iter()
+            .map(|e| e.nodes.map(|n| vertex[n]))
+            .filter(|q| q.iter().all(|&v| v != usize::MAX))
+            .collect();
+        tagged.push(((panel, ply), format!("{panel_name}/{ply_name}"), quads));
+    }
+    // Panel by panel, plies in stack order (innermost first), as the ply ids.
+    tagged.sort_by_key(|t| t.0);
+    let groups: Vec<(String, Vec<[usize; 4]>)> = tagged.into_iter().map(|(_, name, quads)| (name, quads)).collect();
+    let mesh = TexturedMesh {
+        positions: nodes.iter().map(|&n| position(n)).collect(),
+        uvs: nodes.iter().map(|&n| layout.pattern_uv[n].unwrap_or([0.0; 2])).collect(),
+        groups,
+    };
+    (mesh, nodes)
 }
 
 /// Writes the garment VTU. With `state`, points are the deformed positions and seam lines
 /// carry `seam_force_per_length` from the all-DOF internal and external forces `forces`;
 /// without, the flat pattern layout is written (seams as lines between the flat spans,
 /// forces zero). Cell data: `panel`, `ply`, `material`, `part`, `seam` (−1 where it does
-/// not apply) and the force per unit length (quads: zero).
+/// not apply) and the force per unit length (quads: zero). Field data (with a layout): by ply
+/// id, `ply_names` (UTF-8, each name ended by a NUL byte) and `ply_thickness` (m); likewise
+/// `panel_names` and `material_names`.
 pub fn write_garment_vtu(
     path: &Path,
     model: &Model,
@@ -79,6 +121,14 @@ pub fn write_garment_vtu(
         point_data: vec![DataArray { name: "displacement", components: 3, values: &displacement }],
         cell_data: vec![DataArray { name: "seam_force_per_length", components: 3, values: &force }],
         int_cell_data: vec![("panel", int(0)), ("ply", int(1)), ("material", int(2)), ("part", part), ("seam", seam)],
+        field_data: layout.map_or_else(Vec::new, |l| {
+            vec![
+                ("ply_names", FieldValues::names(&l.plies)),
+                ("ply_thickness", FieldValues::Float(l.ply_thickness.clone())),
+                ("panel_names", FieldValues::names(&l.panels)),
+                ("material_names", FieldValues::names(&l.materials)),
+            ]
+        }),
     };
     write_vtu(path, &mesh, binary)
 }

@@ -29,6 +29,77 @@ pub struct GarmentSpec {
     /// Contact between adjacent plies of multi-ply panels (on by default).
     #[serde(default)]
     pub interply: crate::contact::interply::InterplySpec,
+    /// A pattern file whose pieces give the outline, notched edge spans and grain of every
+    /// panel written without an `outline` (matched by piece name).
+    #[serde(default)]
+    pub pattern: Option<PatternSource>,
+}
+
+/// A pattern file (see `crate::pattern`).
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum PatternSource {
+    /// DXF in the AAMA / ASTM D6673 layer convention; `file` relative to the scene file.
+    Dxf {
+        file: String,
+        /// Size to take from a graded file.
+        #[serde(default)]
+        size: Option<String>,
+        /// Drawing units, overriding the header's `$INSUNITS` (required when it is unitless).
+        #[serde(default)]
+        units: Option<LengthUnit>,
+    },
+}
+
+/// A unit of length of pattern files.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum LengthUnit {
+    /// Millimetre.
+    Mm,
+    /// Centimetre.
+    Cm,
+    /// Metre.
+    M,
+    /// Inch (25.4 mm).
+    In,
+}
+
+impl LengthUnit {
+    /// Metres per unit.
+    pub fn metres(self) -> f64 {
+        match self {
+            LengthUnit::Mm => 1e-3,
+            LengthUnit::Cm => 1e-2,
+            LengthUnit::M => 1.0,
+            LengthUnit::In => 0.0254,
+        }
+    }
+}
+
+impl GarmentSpec {
+    /// Ply names in stack order, innermost first: each panel's stack (listed outermost
+    /// first) read from the inside out and merged, so that a ply lies after every ply that
+    /// is inside it in some panel (a ply first met in a later panel goes just after the ply
+    /// below it there, or first if it is innermost); plies used by no panel follow by name.
+    pub fn plies_in_stack_order(&self) -> Vec<String> {
+        let mut order: Vec<String> = Vec::new();
+        for p in &self.panels {
+            let mut below: Option<usize> = None;
+            for name in p.plies.iter().rev() {
+                below = Some(match order.iter().position(|o| o == name) {
+                    Some(i) => i,
+                    None => {
+                        let at = below.map_or(0, |b| b + 1);
+                        order.insert(at, name.clone());
+                        at
+                    }
+                });
+            }
+        }
+        let unused: Vec<String> = self.plies.keys().filter(|k| !order.contains(k)).cloned().collect();
+        order.extend(unused);
+        order
+    }
 }
 
 fn two_percent() -> f64 {
@@ -103,6 +174,8 @@ pub struct PanelSpec {
     /// Panel name.
     pub name: String,
     /// Closed outline in pattern coordinates (m), counter-clockwise, last vertex ≠ first.
+    /// Empty: the piece of the same name from the garment's `pattern` file.
+    #[serde(default)]
     pub outline: Vec<[f64; 2]>,
     /// Named edge spans of the outline.
     #[serde(default)]

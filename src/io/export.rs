@@ -63,6 +63,7 @@ pub fn write_state_vtu(path: &Path, model: &Model, state: &State, options: &Expo
             DataArray { name: "energy_density", components: 1, values: &energy },
         ],
         int_cell_data: vec![("part", part), ("failed", failed)],
+        field_data: vec![],
     };
     write_vtu(path, &mesh, options.binary)
 }

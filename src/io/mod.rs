@@ -2,7 +2,11 @@
 
 pub mod atomic;
 pub mod export;
+pub mod gltf;
+pub mod inp;
 pub mod modes;
+pub mod obj;
 pub mod plot;
 pub mod pvd;
+pub mod surface;
 pub mod vtu;

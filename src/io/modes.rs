@@ -26,6 +26,6 @@ pub fn write_modes_vtu(path: &Path, model: &Model, state: &State, modes: &[Vec<f
         point_data.push(DataArray { name: nt, components: 3, values: t });
         point_data.push(DataArray { name: na, components: 2, values: a });
     }
-    let mesh = VtuMesh { points: &points, quads: &quads, lines: &[], point_data, cell_data: vec![], int_cell_data: vec![] };
+    let mesh = VtuMesh { points: &points, quads: &quads, lines: &[], point_data, cell_data: vec![], int_cell_data: vec![], field_data: vec![] };
     write_vtu(path, &mesh, binary)
 }

@@ -83,6 +83,26 @@ pub struct VtuMesh<'a> {
     /// `Int32` cell data (e.g. part id, ply id), one value per cell:
     /// quads first, then lines.
     pub int_cell_data: Vec<(&'a str, Vec<i32>)>,
+    /// Field data of the whole grid (VTK `FieldData`, any number of tuples), e.g. the
+    /// name and thickness of each ply id.
+    pub field_data: Vec<(&'a str, FieldValues)>,
+}
+
+/// Values of one field-data array.
+#[derive(Debug, Clone, PartialEq)]
+pub enum FieldValues {
+    /// `Float64` scalars.
+    Float(Vec<f64>),
+    /// `UInt8` bytes, e.g. names as UTF-8, each ended by a NUL byte (VTK's own `String`
+    /// arrays are not read by meshio, so names are written as bytes).
+    Bytes(Vec<u8>),
+}
+
+impl FieldValues {
+    /// The strings `names` as UTF-8 bytes, each followed by a NUL byte.
+    pub fn names<S: AsRef<str>>(names: &[S]) -> Self {
+        FieldValues::Bytes(names.iter().flat_map(|n| n.as_ref().bytes().chain([0])).collect())
+    }
 }
 
 impl VtuMesh<'_> {
@@ -118,6 +138,16 @@ pub fn vtu_string(mesh: &VtuMesh, binary: bool) -> Result<String, String> {
          byte_order=\"LittleEndian\" header_type=\"UInt64\">\n",
     );
     w.out.push_str("  <UnstructuredGrid>\n");
+    if !mesh.field_data.is_empty() {
+        w.out.push_str("    <FieldData>\n");
+        for (name, values) in &mesh.field_data {
+            match values {
+                FieldValues::Float(v) => w.array_tuples(Some(name), 1, v, Some(v.len())),
+                FieldValues::Bytes(v) => w.array_tuples(Some(name), 1, v, Some(v.len())),
+            }
+        }
+        w.out.push_str("    </FieldData>\n");
+    }
     let _ = writeln!(
         w.out,
         "    <Piece NumberOfPoints=\"{n_points}\" NumberOfCells=\"{n_cells}\">"
@@ -241,6 +271,16 @@ fn validate(mesh: &VtuMesh, binary: bool) -> Result<(), String> {
     let mut names = HashSet::new();
     for a in &mesh.cell_data {
         check_float_array("cell data", a, n_cells, &cells_desc, binary, &mut names)?;
+    }
+    let mut field_names = HashSet::new();
+    for (name, values) in &mesh.field_data {
+        check_name("field data", name, &mut field_names)?;
+        if let FieldValues::Float(v) = values
+            && !binary
+            && let Some(x) = v.iter().find(|x| !x.is_finite())
+        {
+            return Err(format!("field data array '{name}' has a non-finite value {x}; ASCII VTU cannot store it (use binary output)"));
+        }
     }
     for (name, values) in &mesh.int_cell_data {
         check_name("integer cell data", name, &mut names)?;
@@ -388,10 +428,18 @@ struct XmlOut {
 impl XmlOut {
     /// Writes one `<DataArray>` element (8-space indent, data at 10 spaces).
     fn array<T: VtkScalar>(&mut self, name: Option<&str>, components: usize, values: &[T]) {
+        self.array_tuples(name, components, values, None);
+    }
+
+    /// [`Self::array`] with a `NumberOfTuples` attribute (required for field data).
+    fn array_tuples<T: VtkScalar>(&mut self, name: Option<&str>, components: usize, values: &[T], tuples: Option<usize>) {
         let out = &mut self.out;
         let _ = write!(out, "        <DataArray type=\"{}\"", T::VTK_TYPE);
         if let Some(n) = name {
             let _ = write!(out, " Name=\"{}\"", xml_escape(n));
+        }
+        if let Some(t) = tuples {
+            let _ = write!(out, " NumberOfTuples=\"{t}\"");
         }
         if components != 1 {
             let _ = write!(out, " NumberOfComponents=\"{components}\"");
@@ -456,6 +504,7 @@ mod tests {
                 components: 3,
                 values: d,
             }],
+            field_data: vec![],
             cell_data: vec![DataArray {
                 name: "energy_density",
                 components: 1,

@@ -207,7 +207,12 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
     }
     // Garment plies as further parts.
     let material_names: std::collections::BTreeSet<String> = materials.keys().map(|k| k.to_string()).collect();
-    let garment = match &scene.garment {
+    // A garment's pattern file fills in the outlines of its panels.
+    let resolved = match &scene.garment {
+        Some(g) => Some(crate::pattern::resolve(g, base_dir).map_err(|(field, message)| loc.at(None, Some("pattern"), field, message))?),
+        None => None,
+    };
+    let garment = match &resolved {
         Some(g) => {
             // A ply of a fabric with its own thickness must have that thickness (as a part must).
             for (name, ply) in &g.plies {
