@@ -8,16 +8,22 @@
 //! (∓1, 0)) or at the element centre (SRI). The rule lists the distinct forms once for the
 //! whole section and the distinct pairs once per thickness level, so an element evaluates
 //! each tying-point strain, and each base vector shared by several points, once per state.
+//!
+//! MITC4+ (`ShearTreatment::Mitc4Plus`) adds the membrane tying of `membrane`: the in-plane
+//! strains of every point get the ζ-independent correction ê^m − e^m (assumed minus
+//! mid-surface membrane strains), evaluated once per element from its own pairs.
 
 use nalgebra::{Matrix3, SMatrix, Vector3};
 
 use super::kinematics::{base_forms, edge_gradient, Lin, EDGES, NV, VD, VE};
+use super::membrane::{MembraneTying, TyingWeights, MAX_MPAIRS};
 use super::quadrature::gauss_legendre;
 use super::shell4::{ElementFailure, Section, ShearTreatment, ShellElement};
 
 /// Largest number of distinct base-vector forms of a rule (5 thickness levels of MITC4 need
-/// 54) and of distinct pair strains of one thickness level (MITC4: 15).
-pub(super) const MAX_FORMS: usize = 64;
+/// 54, MITC4+ at most 10 more mid-surface forms) and of distinct pair strains of one
+/// thickness level (MITC4: 15).
+pub(super) const MAX_FORMS: usize = 64 + 8;
 /// See [`MAX_FORMS`].
 pub(super) const MAX_PAIRS: usize = 16;
 
@@ -74,6 +80,8 @@ pub struct SectionRule {
     pub(super) forms: Vec<Lin>,
     /// Thickness levels.
     pub(super) levels: Vec<Level>,
+    /// MITC4+ membrane tying (None: the displacement-based membrane strains).
+    pub(super) membrane: Option<MembraneTying>,
 }
 
 /// Builder state: the distinct forms and the pairs of the current level.
@@ -116,7 +124,7 @@ impl Tables {
             out
         };
         let (xz, yz) = match shear {
-            ShearTreatment::Mitc4 => (
+            ShearTreatment::Mitc4 | ShearTreatment::Mitc4Plus => (
                 tied([(0.0, -1.0, 0.5 * (1.0 - eta)), (0.0, 1.0, 0.5 * (1.0 + eta))], 0),
                 tied([(-1.0, 0.0, 0.5 * (1.0 - xi)), (1.0, 0.0, 0.5 * (1.0 + xi))], 1),
             ),
@@ -139,17 +147,20 @@ impl SectionRule {
         let mut t = Tables { forms: Vec::new(), pairs: Vec::new() };
         let mut levels = Vec::with_capacity(pz.len());
         let (h, shear) = (section.thickness, section.shear);
-        for (&z, &w) in pz.iter().zip(wz) {
-            let mut points = Vec::with_capacity(4);
-            for &eta in p2 {
-                for &xi in p2 {
-                    points.push(t.point(xi, eta, z, w, h, shear));
-                }
+        let mut plane = Vec::with_capacity(5);
+        for &eta in p2 {
+            for &xi in p2 {
+                plane.push((xi, eta));
             }
+        }
+        for (&z, &w) in pz.iter().zip(wz) {
+            let points = plane.iter().map(|&(xi, eta)| t.point(xi, eta, z, w, h, shear)).collect();
             let centre = t.point(0.0, 0.0, z, 1.0, h, shear);
             levels.push(t.level(z, points, centre));
         }
-        Ok(Self { forms: t.forms, levels })
+        plane.push((0.0, 0.0));
+        let membrane = (shear == ShearTreatment::Mitc4Plus).then(|| MembraneTying::new(&plane, &mut |l| t.form(l)));
+        Ok(Self { forms: t.forms, levels, membrane })
     }
 
     /// The rule of the mid-surface centre alone (ξ = η = ζ = 0), for output.
@@ -157,14 +168,17 @@ impl SectionRule {
         let mut t = Tables { forms: Vec::new(), pairs: Vec::new() };
         let centre = t.point(0.0, 0.0, 0.0, 1.0, h, shear);
         let level = t.level(0.0, Vec::new(), centre);
-        Self { forms: t.forms, levels: vec![level] }
+        let membrane = (shear == ShearTreatment::Mitc4Plus).then(|| MembraneTying::new(&[(0.0, 0.0)], &mut |l| t.form(l)));
+        Self { forms: t.forms, levels: vec![level], membrane }
     }
 
     /// Whether the rule fits the element kernel's fixed-size scratch: at most [`MAX_FORMS`]
-    /// forms, and per level at most [`MAX_PAIRS`] pairs and 4 points (always true for the
-    /// 1–5-point thickness rules).
+    /// forms, per level at most [`MAX_PAIRS`] pairs and 4 points, and at most [`MAX_MPAIRS`]
+    /// membrane pairs (always true for the 1–5-point thickness rules).
     pub(super) fn fits(&self) -> bool {
-        self.forms.len() <= MAX_FORMS && self.levels.iter().all(|l| l.pairs.len() <= MAX_PAIRS && l.points.len() <= 4)
+        self.forms.len() <= MAX_FORMS
+            && self.levels.iter().all(|l| l.pairs.len() <= MAX_PAIRS && l.points.len() <= 4)
+            && self.membrane.as_ref().is_none_or(|m| m.pairs.len() <= MAX_MPAIRS)
     }
 }
 
@@ -197,6 +211,8 @@ pub struct ElementGeometry {
     pub(super) points: Box<[PointGeometry]>,
     /// Per level, the centre (full strain map).
     pub(super) centres: Box<[PointGeometry]>,
+    /// MITC4+ tying weights of the rule's membrane points (empty without membrane tying).
+    pub(super) tying: Box<[TyingWeights]>,
 }
 
 impl<'a> ShellElement<'a> {
@@ -228,7 +244,8 @@ impl<'a> ShellElement<'a> {
             }
         }
         let forms = rule.forms.iter().map(|f| f.eval(&r)).collect();
-        Ok(ElementGeometry { r, phi0, forms, points: points.into_boxed_slice(), centres: centres.into_boxed_slice() })
+        let tying = rule.membrane.as_ref().map(|m| m.weights(&self.x0)).unwrap_or_default().into_boxed_slice();
+        Ok(ElementGeometry { r, phi0, forms, points: points.into_boxed_slice(), centres: centres.into_boxed_slice(), tying })
     }
 
     /// Reference metric of an integration point with base-vector forms `g` and weight `w`:
