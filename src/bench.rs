@@ -11,6 +11,8 @@ use crate::io::plot::{plot_xy, Series};
 use crate::results::Summary;
 use crate::scene;
 
+pub mod locking;
+
 /// Bundled benchmark scenes.
 pub mod scenes {
     /// Sze et al. (2004) §3.2 end-moment cantilever.

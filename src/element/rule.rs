@@ -82,6 +82,9 @@ pub struct SectionRule {
     pub(super) levels: Vec<Level>,
     /// MITC4+ membrane tying (None: the displacement-based membrane strains).
     pub(super) membrane: Option<MembraneTying>,
+    /// Whether the lamina's in-plane shear 2E12 is sampled at the element centre (else at
+    /// each point, from the point's own natural strains).
+    pub(super) centre_shear: bool,
 }
 
 /// Builder state: the distinct forms and the pairs of the current level.
@@ -139,6 +142,13 @@ impl Tables {
     }
 }
 
+/// Whether formulation `shear` samples the lamina's in-plane shear at the element centre:
+/// MITC4 and SRI do (see `shell4`); MITC4+ takes it from its assumed field at each point,
+/// as Ko, Lee & Bathe (2017), which reproduces their published regular-mesh values.
+fn centre_shear(shear: ShearTreatment) -> bool {
+    shear != ShearTreatment::Mitc4Plus
+}
+
 impl SectionRule {
     /// Builds the rule of `section`.
     pub fn new(section: &Section) -> Result<Self, ElementFailure> {
@@ -160,7 +170,7 @@ impl SectionRule {
         }
         plane.push((0.0, 0.0));
         let membrane = (shear == ShearTreatment::Mitc4Plus).then(|| MembraneTying::new(&plane, &mut |l| t.form(l)));
-        Ok(Self { forms: t.forms, levels, membrane })
+        Ok(Self { forms: t.forms, levels, membrane, centre_shear: centre_shear(shear) })
     }
 
     /// The rule of the mid-surface centre alone (ξ = η = ζ = 0), for output.
@@ -169,7 +179,7 @@ impl SectionRule {
         let centre = t.point(0.0, 0.0, 0.0, 1.0, h, shear);
         let level = t.level(0.0, Vec::new(), centre);
         let membrane = (shear == ShearTreatment::Mitc4Plus).then(|| MembraneTying::new(&[(0.0, 0.0)], &mut |l| t.form(l)));
-        Self { forms: t.forms, levels: vec![level], membrane }
+        Self { forms: t.forms, levels: vec![level], membrane, centre_shear: centre_shear(shear) }
     }
 
     /// Whether the rule fits the element kernel's fixed-size scratch: at most [`MAX_FORMS`]
@@ -238,8 +248,12 @@ impl<'a> ShellElement<'a> {
         for (level, centre) in rule.levels.iter().zip(&centres) {
             for p in &level.points {
                 let mut pg = self.point_geometry(&r, &p.g, p.w, &dir1)?;
-                pg.mc = centre.m.fixed_rows::<1>(2).into_owned();
-                pg.m.fixed_rows_mut::<1>(2).fill(0.0);
+                if rule.centre_shear {
+                    pg.mc = centre.m.fixed_rows::<1>(2).into_owned();
+                    pg.m.fixed_rows_mut::<1>(2).fill(0.0);
+                } else {
+                    pg.mc.fill(0.0);
+                }
                 points.push(pg);
             }
         }

@@ -318,7 +318,7 @@ impl<'a> ShellElement<'a> {
         let mut first_point = 0;
         // Scratch of the tangent, reused level after level: the pairs' DOF-space rows and the
         // stacked rows of B and DB (per point E11, E22, 2E13, 2E23; the level's 2E12 row last).
-        const STACK: usize = 17;
+        const STACK: usize = 21;
         let mut rows: [Row; MAX_PAIRS] = [[0.0; ELEMENT_DOFS]; MAX_PAIRS];
         let mut b_stack: [Row; STACK] = [[0.0; ELEMENT_DOFS]; STACK];
         let mut db_stack: [Row; STACK] = [[0.0; ELEMENT_DOFS]; STACK];
@@ -376,7 +376,7 @@ impl<'a> ShellElement<'a> {
                     (0..3).for_each(|c| nat[c] += corr[c]);
                 }
                 let mut eps = pg.m * nat;
-                eps[2] = (pg.mc * nat_c)[0];
+                eps[2] += (pg.mc * nat_c)[0];
                 let (stress, density, tangent) = if with_tangent {
                     let res = material.response_at(&eps, level.zeta).map_err(ElementFailure::Material)?;
                     (res.stress, res.energy, Some(res.tangent))
@@ -392,7 +392,7 @@ impl<'a> ShellElement<'a> {
                 if let (Some(m), Some(ms)) = (tying, mstate.as_mut()) {
                     ms.add_stress(&m.points[i], &geom.tying[i], sn.as_slice());
                 }
-                if let (Some(d), true) = (tangent, n_rows + 4 < STACK) {
+                if let (Some(d), true) = (tangent, n_rows + 5 <= STACK) {
                     // B = M Bn (row 2E12 from the centre), DB with D weighted by w det J.
                     let mut bn = natural_rows(&rp.comps, &rows);
                     if let (Some(m), Some(ms)) = (tying, &mstate) {
@@ -400,7 +400,7 @@ impl<'a> ShellElement<'a> {
                     }
                     let mut b: [Row; 5] = [[0.0; ELEMENT_DOFS]; 5];
                     for (r, br) in b.iter_mut().enumerate() {
-                        if r == 2 {
+                        if r == 2 && rule.centre_shear {
                             *br = b_shear;
                             continue;
                         }
@@ -419,7 +419,7 @@ impl<'a> ShellElement<'a> {
                                 dbr.iter_mut().zip(bq).for_each(|(x, y)| *x += dq * y);
                             }
                         }
-                        if r == 2 {
+                        if r == 2 && rule.centre_shear {
                             db_shear.iter_mut().zip(&dbr).for_each(|(x, y)| *x += y);
                         } else {
                             b_stack[slot] = b[r];

@@ -682,11 +682,11 @@ fn make_mesh(spec: &MeshSpec, base_dir: &Path) -> Result<ShellMesh, mesh::MeshEr
     let rad = f64::to_radians;
     match *spec {
         MeshSpec::Rectangle { lx, ly, nx, ny } => mesh::rectangle(lx, ly, nx, ny),
-        MeshSpec::CylindricalPanel { radius, length, theta0, theta1, n_axial, n_circ } => {
-            mesh::cylindrical_panel(radius, length, rad(theta0), rad(theta1), n_axial, n_circ)
+        MeshSpec::CylindricalPanel { radius, length, theta0, theta1, n_axial, n_circ, spacing } => {
+            mesh::cylindrical_panel_spaced(radius, length, rad(theta0), rad(theta1), n_axial, n_circ, spacing)
         }
-        MeshSpec::Hemisphere { radius, hole_angle, phi0, phi1, n_merid, n_circ } => {
-            mesh::hemisphere(radius, rad(hole_angle), rad(phi0), rad(phi1), n_merid, n_circ)
+        MeshSpec::Hemisphere { radius, hole_angle, phi0, phi1, n_merid, n_circ, spacing } => {
+            mesh::hemisphere_spaced(radius, rad(hole_angle), rad(phi0), rad(phi1), n_merid, n_circ, spacing)
         }
         MeshSpec::SlitAnnulus { ri, ro, nr, ntheta } => mesh::slit_annulus(ri, ro, nr, ntheta),
         MeshSpec::Annulus { ri, ro, nr, ntheta, graded } => mesh::annulus(ri, ro, nr, ntheta, graded),
