@@ -69,6 +69,35 @@ pub fn pinched_cylinder(n: usize, f: ShearTreatment, s: Spacing) -> Result<(f64,
     Ok((v / PINCHED_CYLINDER_REFERENCE, sum, w))
 }
 
+/// Reference radial displacement of the pinched hemisphere with an 18° hole under the load
+/// (MacNeal & Harder 1985, FEAD 1, 3–20, as used by the Kratos shell obstacle course wiki,
+/// "Shell obstacle course: Pinched hemisphere": u_x = 0.0924).
+pub const HEMISPHERE_REFERENCE: f64 = 0.0924;
+
+/// Pinched hemisphere (R = 10, t = 0.04, E = 6.825e7, ν = 0.3, 18° polar hole), quarter model
+/// of n×n elements with formulation `f` and spacing `s`: symmetry on the planes y = 0 and
+/// x = 0, a unit outward radial force at (R, 0, 0) and a unit inward one at (0, R, 0) (the
+/// loads of 2 on the full shell halved by the symmetry planes through them), u_z fixed at
+/// one equator node against the free vertical translation. Returns u_x at (R, 0, 0) over
+/// 0.0924 — a bending-dominated doubly curved shell at t/R = 0.004.
+pub fn pinched_hemisphere(n: usize, f: ShearTreatment, s: Spacing) -> Result<(f64, Summary, f64), String> {
+    let text = format!(
+        "Scene(name: \"pinched_hemisphere\", materials: {{\"steel\": StVenantKirchhoff(young: 6.825e7, poisson: 0.3)}},
+         parts: [(name: \"shell\", mesh: Hemisphere(radius: 10.0, hole_angle: 18.0, phi0: 0.0, phi1: 90.0, n_merid: {n}, n_circ: {n}, spacing: {sp}),
+                  material: \"steel\", thickness: 0.04, shear: {form})],
+         node_sets: {{\"xz\": Edge(part: \"shell\", edge: \"phi0\"), \"yz\": Edge(part: \"shell\", edge: \"phi1\"),
+                     \"a\": Nearest(point: (10.0, 0.0, 0.0)), \"b\": Nearest(point: (0.0, 10.0, 0.0))}},
+         boundary: [Symmetry(set: \"xz\", normal: Y), Symmetry(set: \"yz\", normal: X), Fix(set: \"a\", dofs: [Uz])],
+         loads: {{\"out\": NodalForce(set: \"a\", force: (1.0, 0.0, 0.0)), \"in\": NodalForce(set: \"b\", force: (0.0, -1.0, 0.0))}},
+         steps: [(name: \"linear\", increments: 1, linear: true, scale: {{\"out\": 1.0, \"in\": 1.0}})],
+         monitors: [(name: \"a\", point: (10.0, 0.0, 0.0), dofs: [Ux])])",
+        sp = spacing_name(s),
+        form = formulation_name(f),
+    );
+    let (v, sum, w) = linear_value(&text, "pinched_hemisphere", &[], 0)?;
+    Ok((v / HEMISPHERE_REFERENCE, sum, w))
+}
+
 /// Fabric of the arch: membrane stiffness E h = 1000 N/m both ways, ν = 0, in-plane shear
 /// 5 N/m, bending rigidity B = 1e-5 N·m both ways, thickness 0.5 mm: effective thickness
 /// √(12 B / (E h)) = 0.346 mm, as a woven shell fabric (reference/README.md magnitudes).

@@ -147,23 +147,28 @@ pub(super) fn distortion_coefficients(x0: &[Vector3<f64>; 4]) -> [f64; 5] {
     [cr * (cr - 1.0) / (2.0 * d), cr * (cr + 1.0) / (2.0 * d), cs * (cs - 1.0) / (2.0 * d), cs * (cs + 1.0) / (2.0 * d), 2.0 * cr * cs / d]
 }
 
-/// The membrane pair strains of one element state, their DOF rows (with the tangent) and
-/// their accumulated stress weights.
+/// Largest number of membrane points of a rule (2×2 in-plane points and the centre).
+const MAX_MPOINTS: usize = 5;
+
+/// The membrane pair strains of one element state, the corrections ê^m − e^m at the rule's
+/// membrane points and their DOF rows (with the tangent), and the pairs' accumulated stress
+/// weights.
 pub(super) struct MembraneState {
-    /// Pair strains ½(p·q − P·Q).
-    e: [f64; MAX_MPAIRS],
-    /// DOF rows ∂(½ p·q)/∂DOF (only with the tangent).
-    rows: [Row; MAX_MPAIRS],
+    /// Corrections ê^m − e^m of [E_ξξ, E_ηη, E_ξη] per membrane point.
+    corr: [[f64; 3]; MAX_MPOINTS],
+    /// Their DOF rows (only with the tangent).
+    corr_rows: [[Row; 3]; MAX_MPOINTS],
     /// Stress weights σ of the pairs, summed over all points and levels.
     pub sigma: [f64; MAX_MPAIRS],
 }
 
 impl MembraneState {
     /// Evaluates the pairs of `tying` from the reference values `forms0` and changes `df` of
-    /// the rule's forms (cancellation-free, as the level pairs), and their DOF rows if
-    /// `with_tangent`.
+    /// the rule's forms (cancellation-free, as the level pairs) and the corrections at its
+    /// points with tying weights `w`, with their DOF rows if `with_tangent`. The points are
+    /// at most [`MAX_MPOINTS`] (`SectionRule::fits`).
     #[inline(always)]
-    pub(super) fn new(tying: &MembraneTying, forms: &[Lin], forms0: &[Vector3<f64>], df: &[Vector3<f64>], kin: &Kinematics, with_tangent: bool) -> Self {
+    pub(super) fn new(tying: &MembraneTying, w: &[TyingWeights], forms: &[Lin], forms0: &[Vector3<f64>], df: &[Vector3<f64>], kin: &Kinematics, with_tangent: bool) -> Self {
         let mut e = [0.0; MAX_MPAIRS];
         let mut rows = [[0.0; ELEMENT_DOFS]; MAX_MPAIRS];
         for (t, &(p, q)) in tying.pairs.iter().enumerate() {
@@ -178,30 +183,42 @@ impl MembraneState {
                 }
             }
         }
-        Self { e, rows, sigma: [0.0; MAX_MPAIRS] }
-    }
-
-    /// ê^m − e^m of the three in-plane natural components at `point` with weights `w`.
-    #[inline(always)]
-    pub(super) fn correction(&self, point: &MembranePoint, w: &TyingWeights) -> [f64; 3] {
-        std::array::from_fn(|c| w[c].iter().zip(&self.e[..5]).map(|(wt, et)| wt * et).sum::<f64>() - self.e[point.own[c]])
-    }
-
-    /// Adds the DOF rows of ê^m − e^m at `point` to the first three natural rows `bn`.
-    #[inline(always)]
-    pub(super) fn add_correction_rows(&self, point: &MembranePoint, w: &TyingWeights, bn: &mut [Row; 5]) {
-        for (c, b) in bn.iter_mut().take(3).enumerate() {
-            for (t, &wt) in w[c].iter().enumerate() {
-                if wt != 0.0 {
-                    b.iter_mut().zip(&self.rows[t]).for_each(|(x, y)| *x += wt * y);
+        let mut corr = [[0.0; 3]; MAX_MPOINTS];
+        let mut corr_rows = [[[0.0; ELEMENT_DOFS]; 3]; MAX_MPOINTS];
+        for (i, (point, w)) in tying.points.iter().zip(w).enumerate().take(MAX_MPOINTS) {
+            for c in 0..3 {
+                corr[i][c] = w[c].iter().zip(&e[..5]).map(|(wt, et)| wt * et).sum::<f64>() - e[point.own[c]];
+                if with_tangent {
+                    let b = &mut corr_rows[i][c];
+                    for (t, &wt) in w[c].iter().enumerate() {
+                        if wt != 0.0 {
+                            b.iter_mut().zip(&rows[t]).for_each(|(x, y)| *x += wt * y);
+                        }
+                    }
+                    b.iter_mut().zip(&rows[point.own[c]]).for_each(|(x, y)| *x -= y);
                 }
             }
-            b.iter_mut().zip(&self.rows[point.own[c]]).for_each(|(x, y)| *x -= y);
+        }
+        Self { corr, corr_rows, sigma: [0.0; MAX_MPAIRS] }
+    }
+
+    /// Adds ê^m − e^m at membrane point `i` to the first three natural strains `nat`.
+    #[inline(always)]
+    pub(super) fn correct(&self, i: usize, nat: &mut [f64]) {
+        nat.iter_mut().zip(&self.corr[i]).for_each(|(n, c)| *n += c);
+    }
+
+    /// Adds the DOF rows of ê^m − e^m at membrane point `i` to the first three natural rows
+    /// `bn`.
+    #[inline(always)]
+    pub(super) fn add_correction_rows(&self, i: usize, bn: &mut [Row; 5]) {
+        for (b, r) in bn.iter_mut().zip(&self.corr_rows[i]) {
+            b.iter_mut().zip(r).for_each(|(x, y)| *x += y);
         }
     }
 
-    /// Adds the stresses `sn` conjugate to the natural components at `point` to the pairs'
-    /// stress weights.
+    /// Adds the stresses `sn` conjugate to the natural components at `point` (tying weights
+    /// `w`) to the pairs' stress weights.
     #[inline(always)]
     pub(super) fn add_stress(&mut self, point: &MembranePoint, w: &TyingWeights, sn: &[f64]) {
         for c in 0..3 {

@@ -188,7 +188,7 @@ impl SectionRule {
     pub(super) fn fits(&self) -> bool {
         self.forms.len() <= MAX_FORMS
             && self.levels.iter().all(|l| l.pairs.len() <= MAX_PAIRS && l.points.len() <= 4)
-            && self.membrane.as_ref().is_none_or(|m| m.pairs.len() <= MAX_MPAIRS)
+            && self.membrane.as_ref().is_none_or(|m| m.pairs.len() <= MAX_MPAIRS && m.points.len() <= 5)
     }
 }
 

@@ -308,7 +308,7 @@ impl<'a> ShellElement<'a> {
         }
         // MITC4+: the membrane pairs, evaluated once for all levels.
         let tying = rule.membrane.as_ref();
-        let mut mstate = tying.map(|m| MembraneState::new(m, &rule.forms, &geom.forms, &df, &kin, with_tangent));
+        let mut mstate = tying.map(|m| MembraneState::new(m, &geom.tying, &rule.forms, &geom.forms, &df, &kin, with_tangent));
         let mut upper: Upper = [[0.0; ELEMENT_DOFS]; ELEMENT_DOFS];
         let mut energy = 0.0;
         // Generalised forces on the kinematic vectors and the second-derivative matrix
@@ -343,20 +343,22 @@ impl<'a> ShellElement<'a> {
                 }
             }
             // The lamina's centre strains (in-plane shear sampling), shared by its points.
-            let mut nat_c = natural_strain(&level.centre.comps, &e);
+            let mut nat_c = Voigt5::zeros();
             let n_pts = level.points.len();
-            if let (Some(m), Some(ms)) = (tying, &mstate) {
-                let corr = ms.correction(&m.points[n_pts], &geom.tying[n_pts]);
-                (0..3).for_each(|c| nat_c[c] += corr[c]);
+            if rule.centre_shear {
+                nat_c = natural_strain(&level.centre.comps, &e);
+                if let Some(ms) = &mstate {
+                    ms.correct(n_pts, &mut nat_c.as_mut_slice()[..3]);
+                }
             }
             let points = &geom.points[first_point..first_point + level.points.len()];
             first_point += level.points.len();
             // Row 2E12 of the level (the centre's), common to its points.
             let mut b_shear: Row = [0.0; ELEMENT_DOFS];
-            if with_tangent {
+            if with_tangent && rule.centre_shear {
                 let mut bn_c = natural_rows(&level.centre.comps, &rows);
-                if let (Some(m), Some(ms)) = (tying, &mstate) {
-                    ms.add_correction_rows(&m.points[n_pts], &geom.tying[n_pts], &mut bn_c);
+                if let Some(ms) = &mstate {
+                    ms.add_correction_rows(n_pts, &mut bn_c);
                 }
                 for (c, bc) in bn_c.iter().enumerate() {
                     let m = centre_geom.m[(2, c)];
@@ -371,9 +373,8 @@ impl<'a> ShellElement<'a> {
             let mut n_rows = 0;
             for (i, (rp, pg)) in level.points.iter().zip(points).enumerate() {
                 let mut nat = natural_strain(&rp.comps, &e);
-                if let (Some(m), Some(ms)) = (tying, &mstate) {
-                    let corr = ms.correction(&m.points[i], &geom.tying[i]);
-                    (0..3).for_each(|c| nat[c] += corr[c]);
+                if let Some(ms) = &mstate {
+                    ms.correct(i, &mut nat.as_mut_slice()[..3]);
                 }
                 let mut eps = pg.m * nat;
                 eps[2] += (pg.mc * nat_c)[0];
@@ -395,8 +396,8 @@ impl<'a> ShellElement<'a> {
                 if let (Some(d), true) = (tangent, n_rows + 5 <= STACK) {
                     // B = M Bn (row 2E12 from the centre), DB with D weighted by w det J.
                     let mut bn = natural_rows(&rp.comps, &rows);
-                    if let (Some(m), Some(ms)) = (tying, &mstate) {
-                        ms.add_correction_rows(&m.points[i], &geom.tying[i], &mut bn);
+                    if let Some(ms) = &mstate {
+                        ms.add_correction_rows(i, &mut bn);
                     }
                     let mut b: [Row; 5] = [[0.0; ELEMENT_DOFS]; 5];
                     for (r, br) in b.iter_mut().enumerate() {
@@ -430,14 +431,19 @@ impl<'a> ShellElement<'a> {
                     n_rows = slot;
                 }
             }
-            add_pair_stress(&level.centre.comps, &sn_c, &mut sigma);
-            if let (Some(m), Some(ms)) = (tying, mstate.as_mut()) {
-                ms.add_stress(&m.points[n_pts], &geom.tying[n_pts], sn_c.as_slice());
+            if rule.centre_shear {
+                add_pair_stress(&level.centre.comps, &sn_c, &mut sigma);
+                if let (Some(m), Some(ms)) = (tying, mstate.as_mut()) {
+                    ms.add_stress(&m.points[n_pts], &geom.tying[n_pts], sn_c.as_slice());
+                }
+                if with_tangent {
+                    b_stack[n_rows] = b_shear;
+                    db_stack[n_rows] = db_shear;
+                    n_rows += 1;
+                }
             }
             if with_tangent {
-                b_stack[n_rows] = b_shear;
-                db_stack[n_rows] = db_shear;
-                add_upper_btc(&mut upper, &b_stack[..n_rows + 1], &db_stack[..n_rows + 1]);
+                add_upper_btc(&mut upper, &b_stack[..n_rows], &db_stack[..n_rows]);
             }
             add_pair_forces(&sigma, pairs, &rule.forms, current, &mut fv, with_tangent.then_some(&mut x));
         }
@@ -478,9 +484,7 @@ impl<'a> ShellElement<'a> {
         let centre: &RulePoint = &level.centre;
         let mut nat = natural_strain(&centre.comps, &e);
         if let Some(m) = rule.membrane.as_ref() {
-            let ms = MembraneState::new(m, &rule.forms, &geom.forms, &df, &kin, false);
-            let corr = ms.correction(&m.points[0], &geom.tying[0]);
-            (0..3).for_each(|c| nat[c] += corr[c]);
+            MembraneState::new(m, &geom.tying, &rule.forms, &geom.forms, &df, &kin, false).correct(0, &mut nat.as_mut_slice()[..3]);
         }
         let eps = geom.centres[0].m * nat;
         let res = self.section.material.response(&eps).map_err(ElementFailure::Material)?;
