@@ -167,3 +167,74 @@ fn mitc4plus_stiffness_is_independent_of_node_numbering() {
         }
     }
 }
+
+/// Regular meshes of the Scordelis–Lo roof and the pinched cylinder: MITC4+ reproduces the
+/// published MITC4 convergence of Ko, Lee, Lee & Bathe (C&S 193, 2017), quoted in
+/// reference/README.md (normalized by 0.3024 and 1.8248e-5, Belytschko et al. 1985). On
+/// these meshes every element is a flat rectangle, whose assumed membrane strains equal the
+/// displacement-based ones in linear analysis, so MITC4+ and the published MITC4 coincide
+/// (Ko, Lee & Bathe 2017a give the same values for both). The published values have three
+/// digits; tolerance 0.003 on the normalized value (measured within 0.0017).
+#[test]
+fn mitc4plus_regular_meshes_match_published_convergence() {
+    use plyshell::bench::locking::{pinched_cylinder, scordelis_lo};
+    use plyshell::mesh::Spacing::Uniform;
+    let f = ShearTreatment::Mitc4Plus;
+    for (n, published) in [(4, 0.943), (8, 0.973), (16, 0.989), (32, 0.994)] {
+        let v = scordelis_lo(n, f, Uniform).expect("solve").0;
+        assert!((v - published).abs() < 0.003, "Scordelis–Lo {n}x{n}: {v:.4} vs published {published}");
+    }
+    for (n, published) in [(8, 0.747), (16, 0.929), (32, 0.987)] {
+        let v = pinched_cylinder(n, f, Uniform).expect("solve").0;
+        assert!((v - published).abs() < 0.003, "pinched cylinder {n}x{n}: {v:.4} vs published {published}");
+    }
+}
+
+/// Distorted meshes (each edge divided 1:2:…:N, nodes on the exact surface): normalized
+/// deflection against the converged references. Measured (MITC4+ / MITC4): pinched
+/// hemisphere 16×16 0.998 / 0.69, 32×32 1.007 / 0.97; Scordelis–Lo 16×16 1.022 / 1.006,
+/// 32×32 1.003 / 0.999; pinched cylinder 32×32 0.973 / 0.988. Tolerances: the hemisphere
+/// (bending dominated, t/R = 0.004, where membrane locking shows) within 2 % at N = 16 and
+/// 32; Scordelis–Lo within 3 % at 16 and 1 % at 32; the pinched cylinder within 4 % at 32
+/// (MITC4+ is not better than MITC4 there: this mixed membrane–bending point-load problem
+/// does not lock, and MITC4+ is 1.5 % more flexible on this mesh).
+#[test]
+fn mitc4plus_distorted_meshes_converge_to_references() {
+    use plyshell::bench::locking::{pinched_cylinder, pinched_hemisphere, scordelis_lo};
+    use plyshell::mesh::Spacing::Distorted;
+    let f = ShearTreatment::Mitc4Plus;
+    for (n, tol) in [(16, 0.02), (32, 0.02)] {
+        let v = pinched_hemisphere(n, f, Distorted).expect("solve").0;
+        assert!((v - 1.0).abs() < tol, "hemisphere distorted {n}x{n}: {v:.4}");
+    }
+    for (n, tol) in [(16, 0.03), (32, 0.01)] {
+        let v = scordelis_lo(n, f, Distorted).expect("solve").0;
+        assert!((v - 1.0).abs() < tol, "Scordelis–Lo distorted {n}x{n}: {v:.4}");
+    }
+    let v = pinched_cylinder(32, f, Distorted).expect("solve").0;
+    assert!((v - 1.0).abs() < 0.04, "pinched cylinder distorted 32x32: {v:.4}");
+}
+
+/// Fabric quarter-circle arch under a radial tip force (`bench::locking::fabric_arch`;
+/// analytic curved-beam deflection (π/4) f R³ / B) at the effective t/R of garments,
+/// 1e-3, 3e-3 and 7e-3. Regular 16-element mesh: within 1 % (bending discretization error,
+/// measured −0.83 % for every formulation and t/R: the flat rectangular elements do not
+/// lock). Distorted meshes: 32 elements within 2 % (measured −1.0 … −1.2 %), and the
+/// 16-element result independent of t/R to 0.03 (measured 0.931, 0.941, 0.948) — the mark
+/// of a locking-free element; MITC4 gives 0.41, 0.63, 0.75 there.
+#[test]
+fn fabric_arch_bends_without_membrane_locking_at_garment_thickness() {
+    use plyshell::bench::locking::fabric_arch;
+    use plyshell::mesh::Spacing::{Distorted, Uniform};
+    let f = ShearTreatment::Mitc4Plus;
+    let mut coarse = Vec::new();
+    for tr in [1e-3, 3e-3, 7e-3] {
+        let v = fabric_arch(tr, 16, f, Uniform).expect("solve").0;
+        assert!((v - 1.0).abs() < 0.01, "t/R = {tr}, regular 16: {v:.4}");
+        let v = fabric_arch(tr, 32, f, Distorted).expect("solve").0;
+        assert!((v - 1.0).abs() < 0.02, "t/R = {tr}, distorted 32: {v:.4}");
+        coarse.push(fabric_arch(tr, 16, f, Distorted).expect("solve").0);
+    }
+    let spread = coarse.iter().fold(f64::NEG_INFINITY, |a, &b| a.max(b)) - coarse.iter().fold(f64::INFINITY, |a, &b| a.min(b));
+    assert!(spread < 0.03, "distorted 16: {coarse:?}");
+}
