@@ -499,6 +499,31 @@ pub fn run_all(json: &Path, quick: bool) -> Result<(), String> {
             print(recs.last().ok_or("empty")?);
         }
     }
+    // Membrane locking (`bench::locking`): MITC4 and MITC4+ on distorted meshes (edges 1:2:…:N).
+    {
+        use crate::element::ShearTreatment::{Mitc4, Mitc4Plus};
+        use crate::mesh::Spacing::Distorted;
+        for f in [Mitc4, Mitc4Plus] {
+            let tag = locking::formulation_name(f).to_lowercase();
+            for n in pick(vec![8, 16, 32], quick) {
+                let (v, s, w) = locking::pinched_hemisphere(n, f, Distorted)?;
+                let reference = locking::HEMISPHERE_REFERENCE;
+                recs.push(record(&format!("pinched_hemisphere_distorted_{tag}"), format!("{n}x{n}"), &s, w, v * reference, reference, (v - 1.0).abs()));
+                print(recs.last().ok_or("empty")?);
+            }
+            for n in pick(vec![8, 16, 32], quick) {
+                let (v, s, w) = locking::scordelis_lo(n, f, Distorted)?;
+                let reference = locking::SCORDELIS_LO_REFERENCE;
+                recs.push(record(&format!("scordelis_lo_distorted_{tag}"), format!("{n}x{n}"), &s, w, v * reference, reference, (v - 1.0).abs()));
+                print(recs.last().ok_or("empty")?);
+            }
+            for n in pick(vec![8, 16, 32], quick) {
+                let (v, s, w) = locking::fabric_arch(3e-3, n, f, Distorted)?;
+                recs.push(record(&format!("fabric_arch_t_r3e-3_distorted_{tag}"), format!("{n}x{}", (n / 4).max(2)), &s, w, v, 1.0, (v - 1.0).abs()));
+                print(recs.last().ok_or("empty")?);
+            }
+        }
+    }
     let json_text = serde_json::to_vec_pretty(&recs).map_err(|e| e.to_string())?;
     crate::io::atomic::write_atomic(json, &json_text).map_err(|e| format!("{}: {e}", json.display()))?;
     // Error against time, one series per benchmark.
