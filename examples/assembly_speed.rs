@@ -3,7 +3,7 @@
 //! `cargo run --release --example assembly_speed -- --kernel [ELEMENTS] [REPEATS]`:
 //! microseconds per element per tangent and per residual (force + energy) of the 4-node
 //! shell, one thread, for St. Venant–Kirchhoff, Ciarlet neo-Hookean and fabric laminae with
-//! MITC4, SRI and MITC4+, on a patch of distorted, warped, strongly deformed elements (median
+//! MITC4, SRI and both MITC4+ variants, on a patch of distorted, warped, strongly deformed elements (median
 //! of REPEATS passes). Prints checksums of forces, energies and tangents, so that a change
 //! of the kernel can be checked to leave the results unchanged.
 //!
@@ -116,7 +116,7 @@ fn kernel(n: usize, repeats: usize) -> Result<(), String> {
         if only.as_deref().is_some_and(|o| o != name) {
             continue;
         }
-        for shear in [ShearTreatment::Mitc4, ShearTreatment::Sri, ShearTreatment::Mitc4Plus] {
+        for shear in [ShearTreatment::Mitc4, ShearTreatment::Sri, ShearTreatment::Mitc4Plus, ShearTreatment::Mitc4PlusCentre] {
             let section = Section { thickness: h, shear, thickness_points: tp, material: material.clone() };
             let p = patch(n, size);
             let rule = SectionRule::new(&section).map_err(|e| e.to_string())?;

@@ -37,6 +37,7 @@ pub fn formulation_name(f: ShearTreatment) -> &'static str {
         ShearTreatment::Mitc4 => "Mitc4",
         ShearTreatment::Sri => "Sri",
         ShearTreatment::Mitc4Plus => "Mitc4Plus",
+        ShearTreatment::Mitc4PlusCentre => "Mitc4PlusCentre",
     }
 }
 

@@ -9,7 +9,7 @@
 //! whole section and the distinct pairs once per thickness level, so an element evaluates
 //! each tying-point strain, and each base vector shared by several points, once per state.
 //!
-//! MITC4+ (`ShearTreatment::Mitc4Plus`) adds the membrane tying of `membrane`: the in-plane
+//! MITC4+ (`ShearTreatment::Mitc4Plus`, `Mitc4PlusCentre`) adds the membrane tying of `membrane`: the in-plane
 //! strains of every point get the ζ-independent correction ê^m − e^m (assumed minus
 //! mid-surface membrane strains), evaluated once per element from its own pairs.
 
@@ -127,7 +127,7 @@ impl Tables {
             out
         };
         let (xz, yz) = match shear {
-            ShearTreatment::Mitc4 | ShearTreatment::Mitc4Plus => (
+            ShearTreatment::Mitc4 | ShearTreatment::Mitc4Plus | ShearTreatment::Mitc4PlusCentre => (
                 tied([(0.0, -1.0, 0.5 * (1.0 - eta)), (0.0, 1.0, 0.5 * (1.0 + eta))], 0),
                 tied([(-1.0, 0.0, 0.5 * (1.0 - xi)), (1.0, 0.0, 0.5 * (1.0 + xi))], 1),
             ),
@@ -143,8 +143,9 @@ impl Tables {
 }
 
 /// Whether formulation `shear` samples the lamina's in-plane shear at the element centre:
-/// MITC4 and SRI do (see `shell4`); MITC4+ takes it from its assumed field at each point,
-/// as Ko, Lee & Bathe (2017), which reproduces their published regular-mesh values.
+/// MITC4, SRI and MITC4+ with centre shear do (see `shell4`); MITC4+ takes it from its
+/// assumed field at each point, as Ko, Lee & Bathe (2017), which reproduces their
+/// published regular-mesh values.
 fn centre_shear(shear: ShearTreatment) -> bool {
     shear != ShearTreatment::Mitc4Plus
 }
@@ -169,7 +170,7 @@ impl SectionRule {
             levels.push(t.level(z, points, centre));
         }
         plane.push((0.0, 0.0));
-        let membrane = (shear == ShearTreatment::Mitc4Plus).then(|| MembraneTying::new(&plane, &mut |l| t.form(l)));
+        let membrane = shear.assumed_membrane().then(|| MembraneTying::new(&plane, &mut |l| t.form(l)));
         Ok(Self { forms: t.forms, levels, membrane, centre_shear: centre_shear(shear) })
     }
 
@@ -178,7 +179,7 @@ impl SectionRule {
         let mut t = Tables { forms: Vec::new(), pairs: Vec::new() };
         let centre = t.point(0.0, 0.0, 0.0, 1.0, h, shear);
         let level = t.level(0.0, Vec::new(), centre);
-        let membrane = (shear == ShearTreatment::Mitc4Plus).then(|| MembraneTying::new(&[(0.0, 0.0)], &mut |l| t.form(l)));
+        let membrane = shear.assumed_membrane().then(|| MembraneTying::new(&[(0.0, 0.0)], &mut |l| t.form(l)));
         Self { forms: t.forms, levels: vec![level], membrane, centre_shear: centre_shear(shear) }
     }
 

@@ -67,7 +67,7 @@ pub type ElemMat = SMatrix<f64, ELEMENT_DOFS, ELEMENT_DOFS>;
 
 
 /// Element formulation against locking: the transverse shear treatment and, for
-/// `Mitc4Plus`, assumed membrane strains.
+/// `Mitc4Plus` and `Mitc4PlusCentre`, assumed membrane strains.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
 pub enum ShearTreatment {
     /// MITC4 assumed natural shear strains (Dvorkin & Bathe 1984). No spurious modes.
@@ -77,8 +77,20 @@ pub enum ShearTreatment {
     Sri,
     /// MITC4+ (Ko, Lee & Bathe 2017): MITC4 transverse shear plus assumed membrane strains
     /// tied at the edge midpoints and the centre, against membrane locking of curved and
-    /// distorted elements (see `membrane`).
+    /// distorted elements (see `membrane`). The lamina's in-plane shear comes from the
+    /// assumed field at each point, as in the paper.
     Mitc4Plus,
+    /// `Mitc4Plus` with the lamina's in-plane shear sampled at the element centre, as `Mitc4`
+    /// does: the assumed membrane strains of MITC4+ without the parasitic in-plane shear of
+    /// the bilinear membrane in in-plane bending (on rectangles it equals `Mitc4`).
+    Mitc4PlusCentre,
+}
+
+impl ShearTreatment {
+    /// Whether the formulation uses the MITC4+ assumed membrane strains.
+    pub fn assumed_membrane(self) -> bool {
+        matches!(self, ShearTreatment::Mitc4Plus | ShearTreatment::Mitc4PlusCentre)
+    }
 }
 
 /// Shell section: thickness, integration and material of a set of elements.
@@ -620,7 +632,7 @@ mod tests {
     #[test]
     fn free_warped_element_has_six_zero_energy_modes() {
         let (x0, d0) = geometry();
-        for shear in [ShearTreatment::Mitc4, ShearTreatment::Mitc4Plus] {
+        for shear in [ShearTreatment::Mitc4, ShearTreatment::Mitc4Plus, ShearTreatment::Mitc4PlusCentre] {
             let sec = section(shear, false);
             let el = ShellElement { x0, d0, grain: None, section: &sec };
             let k = el.response(&[Vector3::zeros(); 4], &frames(&d0), true).unwrap().stiffness.unwrap();
@@ -634,7 +646,7 @@ mod tests {
     #[test]
     fn tangent_matches_central_differences_of_residual() {
         let (x0, d0) = geometry();
-        for shear in [ShearTreatment::Mitc4, ShearTreatment::Sri, ShearTreatment::Mitc4Plus] {
+        for shear in [ShearTreatment::Mitc4, ShearTreatment::Sri, ShearTreatment::Mitc4Plus, ShearTreatment::Mitc4PlusCentre] {
             for material in ["SVK", "neo-Hookean", "fabric"] {
                 let sec = section_of(shear, material);
                 let el = ShellElement { x0, d0, grain: None, section: &sec };
@@ -676,7 +688,7 @@ mod tests {
     #[test]
     fn rigid_rotation_of_any_size_is_strain_free() {
         let (x0, d0) = geometry();
-        for (shear, deg) in [(ShearTreatment::Mitc4, 170.0f64), (ShearTreatment::Mitc4, 400.0), (ShearTreatment::Mitc4Plus, 170.0), (ShearTreatment::Mitc4Plus, 400.0)] {
+        for (shear, deg) in [(ShearTreatment::Mitc4, 170.0f64), (ShearTreatment::Mitc4, 400.0), (ShearTreatment::Mitc4Plus, 170.0), (ShearTreatment::Mitc4Plus, 400.0), (ShearTreatment::Mitc4PlusCentre, 400.0)] {
             let sec = section(shear, true);
             let el = ShellElement { x0, d0, grain: None, section: &sec };
             let axis = Unit::new_normalize(Vector3::new(0.3, -0.5, 0.8));
