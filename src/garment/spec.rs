@@ -29,6 +29,10 @@ pub struct GarmentSpec {
     /// Contact between adjacent plies of multi-ply panels (on by default).
     #[serde(default)]
     pub interply: crate::contact::interply::InterplySpec,
+    /// Element formulation of every ply (default MITC4; `Mitc4Plus`/`Mitc4PlusCentre` for
+    /// assumed membrane strains on curved, distorted panel meshes).
+    #[serde(default)]
+    pub shear: crate::element::ShearTreatment,
 }
 
 fn two_percent() -> f64 {

@@ -240,11 +240,11 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
     };
     let mut garment_first_node = Vec::new();
     let garment_first_part = parts.len();
-    if let Some((_, gm)) = &garment {
+    if let Some((g, gm)) = &garment {
         for gp in &gm.parts {
             let material = materials.get(gp.material.as_str()).cloned().ok_or_else(|| loc.at_value(&gp.name, &gp.material, "garment.plies", "unknown material"))?;
             let (first_node, first_element) = (x0.len(), elements.len());
-            sections.push(Section { thickness: gp.thickness, shear: Default::default(), thickness_points: 2, material });
+            sections.push(Section { thickness: gp.thickness, shear: g.shear, thickness_points: 2, material });
             for (q, g) in gp.mesh.quads.iter().zip(&gp.grains) {
                 elements.push(ElementDef { nodes: q.map(|n| n + first_node), section: sections.len() - 1, part: parts.len(), grain: Some(*g) });
             }
