@@ -25,7 +25,7 @@ const VARIANTS: [ShearTreatment; 2] = [ShearTreatment::Mitc4Plus, ShearTreatment
 
 /// Membrane patch test on the distorted patch (constant stress: uniaxial σx, then pure
 /// shear τ, applied as boundary tractions): the exact linear displacement field at every
-/// node to 1e-8 (Ko, Lee & Bathe 2017, §4.2: MITC4+ passes the membrane patch test).
+/// node to 1e-8 (MITC4+ passes it, Ko, Lee & Bathe 2017).
 #[test]
 fn mitc4plus_membrane_patch_test() {
     let (e, nu, t, s) = (1.0e6, 0.25, 0.001, 1.0e3);
@@ -130,7 +130,7 @@ fn shapes() -> Vec<(&'static str, [Vector3<f64>; 4], [Vector3<f64>; 4])> {
     vec![("square", square, [Vector3::z(); 4]), ("flat distorted", flat, [Vector3::z(); 4]), ("warped distorted", warped, tilted)]
 }
 
-/// Zero-energy mode test (Ko, Lee & Bathe 2017, §4.1): a free MITC4+ element, square, flat
+/// Zero-energy mode test (as in Ko, Lee & Bathe 2017): a free MITC4+ element, square, flat
 /// distorted and warped distorted with non-parallel directors, thin and thick, has exactly
 /// the six rigid-body modes (eigenvalues below 1e-10 of the largest).
 #[test]
@@ -145,7 +145,7 @@ fn mitc4plus_free_element_has_exactly_six_zero_energy_modes() {
     }
 }
 
-/// Isotropy test (Ko, Lee & Bathe 2017, §4.1): the element stiffness must not depend on
+/// Isotropy test (as in Ko, Lee & Bathe 2017): the element stiffness must not depend on
 /// which node is numbered first. With the lamina frame fixed by a grain direction, renumbering
 /// the nodes cyclically (a → a+1) gives the same stiffness with rows and columns permuted
 /// node-wise, to 1e-10 of its largest entry, on the three shapes.

@@ -8,7 +8,7 @@
 //! and transverse shear compliances are below 1e-4 of it here), Castigliano with
 //! M(θ) = f R cos θ gives the radial tip deflection
 //! δ = (f R³ / B) ∫₀^{π/2} cos²θ dθ = (π/4) f R³ / B
-//! (e.g. Timoshenko & Gere, *Mechanics of Materials*, curved bars), B the fabric's bending
+//! (Castigliano's theorem for a thin curved bar), B the fabric's bending
 //! rigidity along the arch (N·m). The deformation is inextensional, so a locking-free element
 //! converges to it at any t/R; a membrane-locking one is too stiff, most on coarse and
 //! distorted meshes. t/R uses the fabric's effective thickness √(12 B / (E h)). The warp

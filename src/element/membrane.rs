@@ -13,7 +13,9 @@
 //! ê_ξη = e^E + ¼ξ (e^A − e^B) + ¼η (e^C − e^D) + ξη Q̂,
 //! Q̂ = a_A e^A + a_B e^B + a_C e^C + a_D e^D + a_E e^E
 //!
-//! (Ko, Lee & Bathe 2017a, eqs. 27a–c, written with the common term Q̂ collected). e^A = e_ξξ
+//! (the assumed membrane strain field of Ko, Lee & Bathe 2017a, written here with the common
+//! term Q̂ collected; `tests::assumed_field_is_exact_for_constant_strain_on_distorted_element`
+//! checks the identity that fixes the coefficients). e^A = e_ξξ
 //! at A and e^B likewise are the stretches of the element edges η = ±1 (x̄,ξ there is half
 //! the edge chord), e^C, e^D those of ξ = ±1: they vanish when the element bends without
 //! stretching its edges, which is what frees a curved element from membrane locking. Q̂
@@ -125,7 +127,7 @@ impl MembraneTying {
 }
 
 /// Coefficients a_A, a_B, a_C, a_D, a_E of the assumed membrane field (Ko, Lee & Bathe
-/// 2017a, eq. 26): x_d is split as c_r x_r + c_s x_s plus a part normal to x_r and x_s
+/// 2017a): x_d is split as c_r x_r + c_s x_s plus a part normal to x_r and x_s
 /// (least squares over the tangent plane), D = c_r² + c_s² − 1. Zero for a parallelogram.
 pub(super) fn distortion_coefficients(x0: &[Vector3<f64>; 4]) -> [f64; 5] {
     let xr = (-x0[0] + x0[1] + x0[2] - x0[3]) * 0.25;

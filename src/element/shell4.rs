@@ -24,6 +24,12 @@
 //! (the grain, or ∂X/∂ξ at the centre, projected into each lamina), so a uniform strain
 //! field has the same components everywhere and the membrane patch test still holds.
 //!
+//! Membrane strains: displacement-based (`Mitc4`, `Sri`), or the MITC4+ assumed membrane
+//! strains of Ko, Lee & Bathe (2017) tied at the edge midpoints and the centre (`Mitc4Plus`,
+//! `Mitc4PlusCentre`; see `membrane`), which free curved and distorted elements from
+//! membrane locking. `Mitc4Plus` takes the in-plane shear from the assumed field at each
+//! point, as the paper; `Mitc4PlusCentre` samples it at the centre as above.
+//!
 //! Director gradients (geodesic interpolation): along each element edge the director field
 //! is taken as the great-circle (SLERP) arc between the two unit nodal directors; its
 //! derivative at the edge midpoint is E = θ v/|v| = φ v with v = d_b − d_a, θ the angle
@@ -329,7 +335,8 @@ impl<'a> ShellElement<'a> {
         let mut x = [[0.0; NV]; NV];
         let mut first_point = 0;
         // Scratch of the tangent, reused level after level: the pairs' DOF-space rows and the
-        // stacked rows of B and DB (per point E11, E22, 2E13, 2E23; the level's 2E12 row last).
+        // stacked rows of B and DB (per point E11, E22, 2E13, 2E23 and the level's 2E12 row
+        // last with centre-sampled in-plane shear; all five rows per point without).
         const STACK: usize = 21;
         let mut rows: [Row; MAX_PAIRS] = [[0.0; ELEMENT_DOFS]; MAX_PAIRS];
         let mut b_stack: [Row; STACK] = [[0.0; ELEMENT_DOFS]; STACK];
@@ -406,7 +413,8 @@ impl<'a> ShellElement<'a> {
                     ms.add_stress(&m.points[i], &geom.tying[i], sn.as_slice());
                 }
                 if let (Some(d), true) = (tangent, n_rows + 5 <= STACK) {
-                    // B = M Bn (row 2E12 from the centre), DB with D weighted by w det J.
+                    // B = M Bn (row 2E12 from the centre when sampled there), DB with D
+                    // weighted by w det J.
                     let mut bn = natural_rows(&rp.comps, &rows);
                     if let Some(ms) = &mstate {
                         ms.add_correction_rows(i, &mut bn);

@@ -1,7 +1,7 @@
 //! Node spacing of structured grids in their two surface parameters: uniform, or the
 //! distorted pattern of the shell convergence studies (each edge divided in the ratio
-//! 1:2:3:…:N, Ko, Lee & Bathe 2017, C&S 182, §5; Bathe, Iosilevich & Chapelle 2000), with
-//! the nodes then placed on the exact surface by the generator.
+//! 1:2:3:…:N, as in the convergence studies of Ko, Lee & Bathe 2017, C&S 182), with the
+//! nodes then placed on the exact surface by the generator.
 
 use serde::{Deserialize, Serialize};
 
