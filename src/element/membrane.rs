@@ -55,9 +55,9 @@ pub(super) type TyingWeights = [[f64; 5]; 3];
 /// A point where the assumed membrane strains replace the mid-surface ones.
 #[derive(Clone, Copy, Debug)]
 pub(super) struct MembranePoint {
-    /// Natural coordinates.
+    /// Natural coordinate ξ.
     pub xi: f64,
-    /// Natural coordinates.
+    /// Natural coordinate η.
     pub eta: f64,
     /// Indices of the point's own membrane pairs e^m_ξξ, e^m_ηη, e^m_ξη.
     pub own: [usize; 3],
@@ -129,7 +129,7 @@ impl MembraneTying {
 /// Coefficients a_A, a_B, a_C, a_D, a_E of the assumed membrane field (Ko, Lee & Bathe
 /// 2017a): x_d is split as c_r x_r + c_s x_s plus a part normal to x_r and x_s
 /// (least squares over the tangent plane), D = c_r² + c_s² − 1. Zero for a parallelogram.
-pub(super) fn distortion_coefficients(x0: &[Vector3<f64>; 4]) -> [f64; 5] {
+fn distortion_coefficients(x0: &[Vector3<f64>; 4]) -> [f64; 5] {
     let xr = (-x0[0] + x0[1] + x0[2] - x0[3]) * 0.25;
     let xs = (-x0[0] - x0[1] + x0[2] + x0[3]) * 0.25;
     let xd = (x0[0] - x0[1] + x0[2] - x0[3]) * 0.25;

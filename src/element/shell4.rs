@@ -651,6 +651,18 @@ mod tests {
         }
     }
 
+    /// Every formulation with every supported thickness rule (1–5 points) fits the kernel's
+    /// fixed-size scratch, so no section is refused for its rule.
+    #[test]
+    fn every_thickness_rule_fits_the_kernel() {
+        for shear in [ShearTreatment::Mitc4, ShearTreatment::Sri, ShearTreatment::Mitc4Plus, ShearTreatment::Mitc4PlusCentre] {
+            for thickness_points in 1..=5 {
+                let sec = Section { thickness_points, ..section(shear, false) };
+                assert!(SectionRule::new(&sec).unwrap().fits(), "{shear:?}, {thickness_points} points");
+            }
+        }
+    }
+
     #[test]
     fn tangent_matches_central_differences_of_residual() {
         let (x0, d0) = geometry();
