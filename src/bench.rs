@@ -11,6 +11,8 @@ use crate::io::plot::{plot_xy, Series};
 use crate::results::Summary;
 use crate::scene;
 
+pub mod locking;
+
 /// Bundled benchmark scenes.
 pub mod scenes {
     /// Sze et al. (2004) §3.2 end-moment cantilever.
@@ -114,6 +116,11 @@ fn thickness_field(h: f64, shear_sri: bool) -> String {
     if shear_sri { format!("thickness: {h:e}, shear: Sri") } else { format!("thickness: {h:e}") }
 }
 
+/// `thickness: h, shear: f`.
+fn thickness_with(h: f64, f: crate::element::ShearTreatment) -> String {
+    format!("thickness: {h:e}, shear: {}", locking::formulation_name(f))
+}
+
 /// A tip-curve comparison: load level, computed (a, b), reference (a, b).
 #[derive(Clone, Debug)]
 pub struct CurvePoint {
@@ -155,9 +162,15 @@ impl Curve {
 /// (the moment is scaled with EI so M/M0 runs to 2π). Reference: the analytic circle,
 /// −u = L(1 − sin m/m), w = L(1 − cos m)/m.
 pub fn end_moment(nx: usize, h: f64, material: Material, shear_sri: bool) -> Result<Curve, String> {
+    use crate::element::ShearTreatment::{Mitc4, Sri};
+    end_moment_with(nx, h, material, if shear_sri { Sri } else { Mitc4 })
+}
+
+/// [`end_moment`] with element formulation `f`.
+pub fn end_moment_with(nx: usize, h: f64, material: Material, f: crate::element::ShearTreatment) -> Result<Curve, String> {
     let t = Instant::now();
     let mmax = 2.0 * std::f64::consts::PI * 1.2e6 * h.powi(3) / 12.0 / 12.0;
-    let mut rep = vec![("nx: 16", format!("nx: {nx}")), ("thickness: 0.1", thickness_field(h, shear_sri)), ("-52.35987755982988", format!("{:e}", -mmax))];
+    let mut rep = vec![("nx: 16", format!("nx: {nx}")), ("thickness: 0.1", thickness_with(h, f)), ("-52.35987755982988", format!("{:e}", -mmax))];
     rep.extend(material_swap(material));
     let summary = solve_variant(scenes::END_MOMENT, "cantilever_end_moment", &rep)?;
     let tip = &summary.monitors[0];
@@ -495,6 +508,31 @@ pub fn run_all(json: &Path, quick: bool) -> Result<(), String> {
             let name = if dc { "hinged_roof_a_displacement_control" } else { "hinged_roof_a_arc_length" };
             recs.push(record(name, format!("{n}x{n}q"), &c.summary, c.wall_s, c.limit_load, c.reference_limit, c.curve_error));
             print(recs.last().ok_or("empty")?);
+        }
+    }
+    // Membrane locking (`bench::locking`): MITC4 and both MITC4+ on distorted meshes (edges 1:2:…:N).
+    {
+        use crate::element::ShearTreatment::{Mitc4, Mitc4Plus, Mitc4PlusCentre};
+        use crate::mesh::Spacing::Distorted;
+        for f in [Mitc4, Mitc4Plus, Mitc4PlusCentre] {
+            let tag = locking::formulation_name(f).to_lowercase();
+            for n in pick(vec![8, 16, 32], quick) {
+                let (v, s, w) = locking::pinched_hemisphere(n, f, Distorted)?;
+                let reference = locking::HEMISPHERE_REFERENCE;
+                recs.push(record(&format!("pinched_hemisphere_distorted_{tag}"), format!("{n}x{n}"), &s, w, v * reference, reference, (v - 1.0).abs()));
+                print(recs.last().ok_or("empty")?);
+            }
+            for n in pick(vec![8, 16, 32], quick) {
+                let (v, s, w) = locking::scordelis_lo(n, f, Distorted)?;
+                let reference = locking::SCORDELIS_LO_REFERENCE;
+                recs.push(record(&format!("scordelis_lo_distorted_{tag}"), format!("{n}x{n}"), &s, w, v * reference, reference, (v - 1.0).abs()));
+                print(recs.last().ok_or("empty")?);
+            }
+            for n in pick(vec![8, 16, 32], quick) {
+                let (v, s, w) = locking::fabric_arch(3e-3, n, f, Distorted)?;
+                recs.push(record(&format!("fabric_arch_t_r3e-3_distorted_{tag}"), format!("{n}x{}", (n / 4).max(2)), &s, w, v, 1.0, (v - 1.0).abs()));
+                print(recs.last().ok_or("empty")?);
+            }
         }
     }
     let json_text = serde_json::to_vec_pretty(&recs).map_err(|e| e.to_string())?;

@@ -8,16 +8,22 @@
 //! (∓1, 0)) or at the element centre (SRI). The rule lists the distinct forms once for the
 //! whole section and the distinct pairs once per thickness level, so an element evaluates
 //! each tying-point strain, and each base vector shared by several points, once per state.
+//!
+//! MITC4+ (`ShearTreatment::Mitc4Plus`, `Mitc4PlusCentre`) adds the membrane tying of `membrane`: the in-plane
+//! strains of every point get the ζ-independent correction ê^m − e^m (assumed minus
+//! mid-surface membrane strains), evaluated once per element from its own pairs.
 
 use nalgebra::{Matrix3, SMatrix, Vector3};
 
 use super::kinematics::{base_forms, edge_gradient, Lin, EDGES, NV, VD, VE};
+use super::membrane::{MembraneTying, TyingWeights, MAX_MPAIRS};
 use super::quadrature::gauss_legendre;
 use super::shell4::{ElementFailure, Section, ShearTreatment, ShellElement};
 
 /// Largest number of distinct base-vector forms of a rule (5 thickness levels of MITC4 need
-/// 54) and of distinct pair strains of one thickness level (MITC4: 15).
-pub(super) const MAX_FORMS: usize = 64;
+/// 54, MITC4+ at most 10 more mid-surface forms) and of distinct pair strains of one
+/// thickness level (MITC4: 15).
+pub(super) const MAX_FORMS: usize = 64 + 8;
 /// See [`MAX_FORMS`].
 pub(super) const MAX_PAIRS: usize = 16;
 
@@ -74,6 +80,11 @@ pub struct SectionRule {
     pub(super) forms: Vec<Lin>,
     /// Thickness levels.
     pub(super) levels: Vec<Level>,
+    /// MITC4+ membrane tying (None: the displacement-based membrane strains).
+    pub(super) membrane: Option<MembraneTying>,
+    /// Whether the lamina's in-plane shear 2E12 is sampled at the element centre (else at
+    /// each point, from the point's own natural strains).
+    pub(super) centre_shear: bool,
 }
 
 /// Builder state: the distinct forms and the pairs of the current level.
@@ -116,7 +127,7 @@ impl Tables {
             out
         };
         let (xz, yz) = match shear {
-            ShearTreatment::Mitc4 => (
+            ShearTreatment::Mitc4 | ShearTreatment::Mitc4Plus | ShearTreatment::Mitc4PlusCentre => (
                 tied([(0.0, -1.0, 0.5 * (1.0 - eta)), (0.0, 1.0, 0.5 * (1.0 + eta))], 0),
                 tied([(-1.0, 0.0, 0.5 * (1.0 - xi)), (1.0, 0.0, 0.5 * (1.0 + xi))], 1),
             ),
@@ -131,6 +142,14 @@ impl Tables {
     }
 }
 
+/// Whether formulation `shear` samples the lamina's in-plane shear at the element centre:
+/// MITC4, SRI and MITC4+ with centre shear do (see `shell4`); MITC4+ takes it from its
+/// assumed field at each point, as Ko, Lee & Bathe (2017), which reproduces their
+/// published regular-mesh values.
+fn centre_shear(shear: ShearTreatment) -> bool {
+    shear != ShearTreatment::Mitc4Plus
+}
+
 impl SectionRule {
     /// Builds the rule of `section`.
     pub fn new(section: &Section) -> Result<Self, ElementFailure> {
@@ -139,17 +158,20 @@ impl SectionRule {
         let mut t = Tables { forms: Vec::new(), pairs: Vec::new() };
         let mut levels = Vec::with_capacity(pz.len());
         let (h, shear) = (section.thickness, section.shear);
-        for (&z, &w) in pz.iter().zip(wz) {
-            let mut points = Vec::with_capacity(4);
-            for &eta in p2 {
-                for &xi in p2 {
-                    points.push(t.point(xi, eta, z, w, h, shear));
-                }
+        let mut plane = Vec::with_capacity(5);
+        for &eta in p2 {
+            for &xi in p2 {
+                plane.push((xi, eta));
             }
+        }
+        for (&z, &w) in pz.iter().zip(wz) {
+            let points = plane.iter().map(|&(xi, eta)| t.point(xi, eta, z, w, h, shear)).collect();
             let centre = t.point(0.0, 0.0, z, 1.0, h, shear);
             levels.push(t.level(z, points, centre));
         }
-        Ok(Self { forms: t.forms, levels })
+        plane.push((0.0, 0.0));
+        let membrane = shear.assumed_membrane().then(|| MembraneTying::new(&plane, &mut |l| t.form(l)));
+        Ok(Self { forms: t.forms, levels, membrane, centre_shear: centre_shear(shear) })
     }
 
     /// The rule of the mid-surface centre alone (ξ = η = ζ = 0), for output.
@@ -157,14 +179,17 @@ impl SectionRule {
         let mut t = Tables { forms: Vec::new(), pairs: Vec::new() };
         let centre = t.point(0.0, 0.0, 0.0, 1.0, h, shear);
         let level = t.level(0.0, Vec::new(), centre);
-        Self { forms: t.forms, levels: vec![level] }
+        let membrane = shear.assumed_membrane().then(|| MembraneTying::new(&[(0.0, 0.0)], &mut |l| t.form(l)));
+        Self { forms: t.forms, levels: vec![level], membrane, centre_shear: centre_shear(shear) }
     }
 
     /// Whether the rule fits the element kernel's fixed-size scratch: at most [`MAX_FORMS`]
-    /// forms, and per level at most [`MAX_PAIRS`] pairs and 4 points (always true for the
-    /// 1–5-point thickness rules).
+    /// forms, per level at most [`MAX_PAIRS`] pairs and 4 points, and at most [`MAX_MPAIRS`]
+    /// membrane pairs (always true for the 1–5-point thickness rules).
     pub(super) fn fits(&self) -> bool {
-        self.forms.len() <= MAX_FORMS && self.levels.iter().all(|l| l.pairs.len() <= MAX_PAIRS && l.points.len() <= 4)
+        self.forms.len() <= MAX_FORMS
+            && self.levels.iter().all(|l| l.pairs.len() <= MAX_PAIRS && l.points.len() <= 4)
+            && self.membrane.as_ref().is_none_or(|m| m.pairs.len() <= MAX_MPAIRS && m.points.len() <= 5)
     }
 }
 
@@ -197,6 +222,8 @@ pub struct ElementGeometry {
     pub(super) points: Box<[PointGeometry]>,
     /// Per level, the centre (full strain map).
     pub(super) centres: Box<[PointGeometry]>,
+    /// MITC4+ tying weights of the rule's membrane points (empty without membrane tying).
+    pub(super) tying: Box<[TyingWeights]>,
 }
 
 impl<'a> ShellElement<'a> {
@@ -222,13 +249,18 @@ impl<'a> ShellElement<'a> {
         for (level, centre) in rule.levels.iter().zip(&centres) {
             for p in &level.points {
                 let mut pg = self.point_geometry(&r, &p.g, p.w, &dir1)?;
-                pg.mc = centre.m.fixed_rows::<1>(2).into_owned();
-                pg.m.fixed_rows_mut::<1>(2).fill(0.0);
+                if rule.centre_shear {
+                    pg.mc = centre.m.fixed_rows::<1>(2).into_owned();
+                    pg.m.fixed_rows_mut::<1>(2).fill(0.0);
+                } else {
+                    pg.mc.fill(0.0);
+                }
                 points.push(pg);
             }
         }
         let forms = rule.forms.iter().map(|f| f.eval(&r)).collect();
-        Ok(ElementGeometry { r, phi0, forms, points: points.into_boxed_slice(), centres: centres.into_boxed_slice() })
+        let tying = rule.membrane.as_ref().map(|m| m.weights(&self.x0)).unwrap_or_default().into_boxed_slice();
+        Ok(ElementGeometry { r, phi0, forms, points: points.into_boxed_slice(), centres: centres.into_boxed_slice(), tying })
     }
 
     /// Reference metric of an integration point with base-vector forms `g` and weight `w`:

@@ -24,6 +24,12 @@
 //! (the grain, or ∂X/∂ξ at the centre, projected into each lamina), so a uniform strain
 //! field has the same components everywhere and the membrane patch test still holds.
 //!
+//! Membrane strains: displacement-based (`Mitc4`, `Sri`), or the MITC4+ assumed membrane
+//! strains of Ko, Lee & Bathe (2017) tied at the edge midpoints and the centre (`Mitc4Plus`,
+//! `Mitc4PlusCentre`; see `membrane`), which free curved and distorted elements from
+//! membrane locking. `Mitc4Plus` takes the in-plane shear from the assumed field at each
+//! point, as the paper; `Mitc4PlusCentre` samples it at the centre as above.
+//!
 //! Director gradients (geodesic interpolation): along each element edge the director field
 //! is taken as the great-circle (SLERP) arc between the two unit nodal directors; its
 //! derivative at the edge midpoint is E = θ v/|v| = φ v with v = d_b − d_a, θ the angle
@@ -51,7 +57,8 @@ use nalgebra::{SMatrix, SVector, Vector3};
 use serde::{Deserialize, Serialize};
 
 use super::director::DirectorFrame;
-use super::kinematics::{Kinematics, NV};
+use super::kinematics::{Kinematics, Lin, NV};
+use super::membrane::MembraneState;
 use super::quadrature::{bilinear, gauss_legendre};
 use super::rule::{Comp, RulePoint, MAX_FORMS, MAX_PAIRS};
 pub use super::rule::{ElementGeometry, SectionRule};
@@ -65,7 +72,8 @@ pub type ElemVec = SVector<f64, ELEMENT_DOFS>;
 pub type ElemMat = SMatrix<f64, ELEMENT_DOFS, ELEMENT_DOFS>;
 
 
-/// Transverse shear treatment against shear locking.
+/// Element formulation against locking: the transverse shear treatment and, for
+/// `Mitc4Plus` and `Mitc4PlusCentre`, assumed membrane strains.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
 pub enum ShearTreatment {
     /// MITC4 assumed natural shear strains (Dvorkin & Bathe 1984). No spurious modes.
@@ -73,6 +81,22 @@ pub enum ShearTreatment {
     Mitc4,
     /// Selective reduced integration: shear strains sampled at the element centre.
     Sri,
+    /// MITC4+ (Ko, Lee & Bathe 2017): MITC4 transverse shear plus assumed membrane strains
+    /// tied at the edge midpoints and the centre, against membrane locking of curved and
+    /// distorted elements (see `membrane`). The lamina's in-plane shear comes from the
+    /// assumed field at each point, as in the paper.
+    Mitc4Plus,
+    /// `Mitc4Plus` with the lamina's in-plane shear sampled at the element centre, as `Mitc4`
+    /// does: the assumed membrane strains of MITC4+ without the parasitic in-plane shear of
+    /// the bilinear membrane in in-plane bending (on rectangles it equals `Mitc4`).
+    Mitc4PlusCentre,
+}
+
+impl ShearTreatment {
+    /// Whether the formulation uses the MITC4+ assumed membrane strains.
+    pub fn assumed_membrane(self) -> bool {
+        matches!(self, ShearTreatment::Mitc4Plus | ShearTreatment::Mitc4PlusCentre)
+    }
 }
 
 /// Shell section: thickness, integration and material of a set of elements.
@@ -172,6 +196,30 @@ fn add_pair_stress(comps: &[Comp; 5], sn: &Voigt5, sigma: &mut [f64; MAX_PAIRS])
     for (c, comp) in comps.iter().enumerate() {
         for (t, w) in comp.terms() {
             sigma[t] += sn[c] * w;
+        }
+    }
+}
+
+/// Adds the gradients σ ∂(½ p·q)/∂V_i = ½σ (c^p_i q + c^q_i p) of the pair strains (form
+/// indices `pairs`, stress weights `sigma`, current form values `current`) to the generalised
+/// forces `fv` and, when `x` is given, their second derivatives to `x`.
+#[inline(always)]
+fn add_pair_forces(sigma: &[f64], pairs: &[(usize, usize)], forms: &[Lin], current: impl Fn(usize) -> Vector3<f64>, fv: &mut [Vector3<f64>; NV], mut x: Option<&mut [[f64; NV]; NV]>) {
+    for (&sg, &(p, q)) in sigma.iter().zip(pairs) {
+        if sg == 0.0 {
+            continue;
+        }
+        let (lp, lq) = (&forms[p], &forms[q]);
+        let half = 0.5 * sg;
+        let (pc, qc) = (current(p), current(q));
+        for (i, ci) in lp.terms() {
+            fv[i] += qc * (half * ci);
+        }
+        for (i, ci) in lq.terms() {
+            fv[i] += pc * (half * ci);
+        }
+        if let Some(x) = x.as_deref_mut() {
+            add_pair_second_derivative(x, lp, lq, sg);
         }
     }
 }
@@ -276,6 +324,9 @@ impl<'a> ShellElement<'a> {
         for (d, f) in df.iter_mut().zip(rule.forms.iter()) {
             *d = f.eval(&kin.dv);
         }
+        // MITC4+: the membrane pairs, evaluated once for all levels.
+        let tying = rule.membrane.as_ref();
+        let mut mstate = tying.map(|m| MembraneState::new(m, &geom.tying, &rule.forms, &geom.forms, &df, &kin, with_tangent));
         let mut upper: Upper = [[0.0; ELEMENT_DOFS]; ELEMENT_DOFS];
         let mut energy = 0.0;
         // Generalised forces on the kinematic vectors and the second-derivative matrix
@@ -284,8 +335,9 @@ impl<'a> ShellElement<'a> {
         let mut x = [[0.0; NV]; NV];
         let mut first_point = 0;
         // Scratch of the tangent, reused level after level: the pairs' DOF-space rows and the
-        // stacked rows of B and DB (per point E11, E22, 2E13, 2E23; the level's 2E12 row last).
-        const STACK: usize = 17;
+        // stacked rows of B and DB (per point E11, E22, 2E13, 2E23 and the level's 2E12 row
+        // last with centre-sampled in-plane shear; all five rows per point without).
+        const STACK: usize = 21;
         let mut rows: [Row; MAX_PAIRS] = [[0.0; ELEMENT_DOFS]; MAX_PAIRS];
         let mut b_stack: [Row; STACK] = [[0.0; ELEMENT_DOFS]; STACK];
         let mut db_stack: [Row; STACK] = [[0.0; ELEMENT_DOFS]; STACK];
@@ -310,13 +362,23 @@ impl<'a> ShellElement<'a> {
                 }
             }
             // The lamina's centre strains (in-plane shear sampling), shared by its points.
-            let nat_c = natural_strain(&level.centre.comps, &e);
+            let mut nat_c = Voigt5::zeros();
+            let n_pts = level.points.len();
+            if rule.centre_shear {
+                nat_c = natural_strain(&level.centre.comps, &e);
+                if let Some(ms) = &mstate {
+                    ms.correct(n_pts, &mut nat_c.as_mut_slice()[..3]);
+                }
+            }
             let points = &geom.points[first_point..first_point + level.points.len()];
             first_point += level.points.len();
             // Row 2E12 of the level (the centre's), common to its points.
             let mut b_shear: Row = [0.0; ELEMENT_DOFS];
-            if with_tangent {
-                let bn_c = natural_rows(&level.centre.comps, &rows);
+            if with_tangent && rule.centre_shear {
+                let mut bn_c = natural_rows(&level.centre.comps, &rows);
+                if let Some(ms) = &mstate {
+                    ms.add_correction_rows(n_pts, &mut bn_c);
+                }
                 for (c, bc) in bn_c.iter().enumerate() {
                     let m = centre_geom.m[(2, c)];
                     b_shear.iter_mut().zip(bc).for_each(|(b, r)| *b += m * r);
@@ -328,10 +390,13 @@ impl<'a> ShellElement<'a> {
             // points, so it enters once with Σ (DB)₂ (the last stacked row).
             let mut db_shear: Row = [0.0; ELEMENT_DOFS];
             let mut n_rows = 0;
-            for (rp, pg) in level.points.iter().zip(points) {
-                let nat = natural_strain(&rp.comps, &e);
+            for (i, (rp, pg)) in level.points.iter().zip(points).enumerate() {
+                let mut nat = natural_strain(&rp.comps, &e);
+                if let Some(ms) = &mstate {
+                    ms.correct(i, &mut nat.as_mut_slice()[..3]);
+                }
                 let mut eps = pg.m * nat;
-                eps[2] = (pg.mc * nat_c)[0];
+                eps[2] += (pg.mc * nat_c)[0];
                 let (stress, density, tangent) = if with_tangent {
                     let res = material.response_at(&eps, level.zeta).map_err(ElementFailure::Material)?;
                     (res.stress, res.energy, Some(res.tangent))
@@ -344,12 +409,19 @@ impl<'a> ShellElement<'a> {
                 let sn = pg.m.transpose() * sw;
                 sn_c += pg.mc.transpose() * sw[2];
                 add_pair_stress(&rp.comps, &sn, &mut sigma);
-                if let (Some(d), true) = (tangent, n_rows + 4 < STACK) {
-                    // B = M Bn (row 2E12 from the centre), DB with D weighted by w det J.
-                    let bn = natural_rows(&rp.comps, &rows);
+                if let (Some(m), Some(ms)) = (tying, mstate.as_mut()) {
+                    ms.add_stress(&m.points[i], &geom.tying[i], sn.as_slice());
+                }
+                if let (Some(d), true) = (tangent, n_rows + 5 <= STACK) {
+                    // B = M Bn (row 2E12 from the centre when sampled there), DB with D
+                    // weighted by w det J.
+                    let mut bn = natural_rows(&rp.comps, &rows);
+                    if let Some(ms) = &mstate {
+                        ms.add_correction_rows(i, &mut bn);
+                    }
                     let mut b: [Row; 5] = [[0.0; ELEMENT_DOFS]; 5];
                     for (r, br) in b.iter_mut().enumerate() {
-                        if r == 2 {
+                        if r == 2 && rule.centre_shear {
                             *br = b_shear;
                             continue;
                         }
@@ -368,7 +440,7 @@ impl<'a> ShellElement<'a> {
                                 dbr.iter_mut().zip(bq).for_each(|(x, y)| *x += dq * y);
                             }
                         }
-                        if r == 2 {
+                        if r == 2 && rule.centre_shear {
                             db_shear.iter_mut().zip(&dbr).for_each(|(x, y)| *x += y);
                         } else {
                             b_stack[slot] = b[r];
@@ -379,30 +451,25 @@ impl<'a> ShellElement<'a> {
                     n_rows = slot;
                 }
             }
-            add_pair_stress(&level.centre.comps, &sn_c, &mut sigma);
-            if with_tangent {
-                b_stack[n_rows] = b_shear;
-                db_stack[n_rows] = db_shear;
-                add_upper_btc(&mut upper, &b_stack[..n_rows + 1], &db_stack[..n_rows + 1]);
-            }
-            // Gradients and second derivatives of the pair strains, weighted by σ.
-            for (&sg, &(p, q)) in sigma.iter().zip(pairs) {
-                if sg == 0.0 {
-                    continue;
-                }
-                let (lp, lq) = (&rule.forms[p], &rule.forms[q]);
-                let half = 0.5 * sg;
-                let (pc, qc) = (current(p), current(q));
-                for (i, ci) in lp.terms() {
-                    fv[i] += qc * (half * ci);
-                }
-                for (i, ci) in lq.terms() {
-                    fv[i] += pc * (half * ci);
+            if rule.centre_shear {
+                add_pair_stress(&level.centre.comps, &sn_c, &mut sigma);
+                if let (Some(m), Some(ms)) = (tying, mstate.as_mut()) {
+                    ms.add_stress(&m.points[n_pts], &geom.tying[n_pts], sn_c.as_slice());
                 }
                 if with_tangent {
-                    add_pair_second_derivative(&mut x, lp, lq, sg);
+                    b_stack[n_rows] = b_shear;
+                    db_stack[n_rows] = db_shear;
+                    n_rows += 1;
                 }
             }
+            if with_tangent {
+                add_upper_btc(&mut upper, &b_stack[..n_rows], &db_stack[..n_rows]);
+            }
+            add_pair_forces(&sigma, pairs, &rule.forms, current, &mut fv, with_tangent.then_some(&mut x));
+        }
+        if let (Some(m), Some(ms)) = (tying, &mstate) {
+            let current = |f: usize| geom.forms[f] + df[f];
+            add_pair_forces(&ms.sigma, &m.pairs, &rule.forms, current, &mut fv, with_tangent.then_some(&mut x));
         }
         let feff = kin.director_chain(&fv);
         let mut force = ElemVec::zeros();
@@ -428,13 +495,18 @@ impl<'a> ShellElement<'a> {
         let geom = self.geometry(&rule)?;
         let kin = Kinematics::new(&geom.r, &geom.phi0, u, frames)?;
         let level = &rule.levels[0];
+        let df: Vec<Vector3<f64>> = rule.forms.iter().map(|f| f.eval(&kin.dv)).collect();
         let mut e = [0.0; MAX_PAIRS];
         for (et, &(p, q)) in e.iter_mut().zip(&level.pairs) {
-            let (pr, dp, qr, dq) = (geom.forms[p], rule.forms[p].eval(&kin.dv), geom.forms[q], rule.forms[q].eval(&kin.dv));
+            let (pr, dp, qr, dq) = (geom.forms[p], df[p], geom.forms[q], df[q]);
             *et = 0.5 * (pr.dot(&dq) + dp.dot(&qr) + dp.dot(&dq));
         }
         let centre: &RulePoint = &level.centre;
-        let eps = geom.centres[0].m * natural_strain(&centre.comps, &e);
+        let mut nat = natural_strain(&centre.comps, &e);
+        if let Some(m) = rule.membrane.as_ref() {
+            MembraneState::new(m, &geom.tying, &rule.forms, &geom.forms, &df, &kin, false).correct(0, &mut nat.as_mut_slice()[..3]);
+        }
+        let eps = geom.centres[0].m * nat;
         let res = self.section.material.response(&eps).map_err(ElementFailure::Material)?;
         Ok((eps, res.stress))
     }
@@ -463,16 +535,26 @@ impl<'a> ShellElement<'a> {
 mod tests {
     use super::*;
     use crate::element::kinematics::arc_factor;
-    use crate::material::{NeoHookean, StVenantKirchhoff};
+    use crate::material::{Fabric, FabricProperties, NeoHookean, StVenantKirchhoff};
     use nalgebra::{Rotation3, Unit};
 
     fn section(shear: ShearTreatment, nh: bool) -> Section {
-        let material: Arc<dyn ShellMaterial> = if nh {
-            Arc::new(NeoHookean::new(1.0e4 / 3.0, 1.0e4 / 2.6))
-        } else {
-            Arc::new(StVenantKirchhoff::new(1.0e4, 0.3, 5.0 / 6.0))
+        section_of(shear, if nh { "neo-Hookean" } else { "SVK" })
+    }
+
+    /// A section of thickness 0.05 of the named lamina: "SVK", "neo-Hookean" or "fabric"
+    /// (the cotton broadcloth preset at that thickness, three thickness points).
+    fn section_of(shear: ShearTreatment, material: &str) -> Section {
+        let (material, thickness_points): (Arc<dyn ShellMaterial>, usize) = match material {
+            "neo-Hookean" => (Arc::new(NeoHookean::new(1.0e4 / 3.0, 1.0e4 / 2.6)), 2),
+            "fabric" => {
+                let mut p = FabricProperties::preset("cotton_broadcloth").expect("preset");
+                p.thickness = 0.05;
+                (Arc::new(Fabric::new(p)), 3)
+            }
+            _ => (Arc::new(StVenantKirchhoff::new(1.0e4, 0.3, 5.0 / 6.0)), 2),
         };
-        Section { thickness: 0.05, shear, thickness_points: 2, material }
+        Section { thickness: 0.05, shear, thickness_points, material }
     }
 
     /// A distorted, slightly warped quad with non-parallel directors.
@@ -554,24 +636,39 @@ mod tests {
     /// A free, distorted and warped MITC4 element with non-parallel directors keeps exactly
     /// the six rigid-body zero-energy modes (Dvorkin & Bathe 1984) with the centre-sampled
     /// in-plane shear and the geodesic director gradients.
+    /// MITC4+ (Ko, Lee & Bathe 2017) keeps exactly six on the same element.
     #[test]
     fn free_warped_element_has_six_zero_energy_modes() {
         let (x0, d0) = geometry();
-        let sec = section(ShearTreatment::Mitc4, false);
-        let el = ShellElement { x0, d0, grain: None, section: &sec };
-        let k = el.response(&[Vector3::zeros(); 4], &frames(&d0), true).unwrap().stiffness.unwrap();
-        let eig = nalgebra::DMatrix::from_fn(20, 20, |i, j| k[(i, j)]).symmetric_eigen();
-        let max = eig.eigenvalues.iter().fold(0.0f64, |a, b| a.max(b.abs()));
-        let zero = eig.eigenvalues.iter().filter(|v| v.abs() < 1e-10 * max).count();
-        assert_eq!(zero, 6, "eigenvalues {:?}", eig.eigenvalues.as_slice());
+        for shear in [ShearTreatment::Mitc4, ShearTreatment::Mitc4Plus, ShearTreatment::Mitc4PlusCentre] {
+            let sec = section(shear, false);
+            let el = ShellElement { x0, d0, grain: None, section: &sec };
+            let k = el.response(&[Vector3::zeros(); 4], &frames(&d0), true).unwrap().stiffness.unwrap();
+            let eig = nalgebra::DMatrix::from_fn(20, 20, |i, j| k[(i, j)]).symmetric_eigen();
+            let max = eig.eigenvalues.iter().fold(0.0f64, |a, b| a.max(b.abs()));
+            let zero = eig.eigenvalues.iter().filter(|v| v.abs() < 1e-10 * max).count();
+            assert_eq!(zero, 6, "{shear:?}: eigenvalues {:?}", eig.eigenvalues.as_slice());
+        }
+    }
+
+    /// Every formulation with every supported thickness rule (1–5 points) fits the kernel's
+    /// fixed-size scratch, so no section is refused for its rule.
+    #[test]
+    fn every_thickness_rule_fits_the_kernel() {
+        for shear in [ShearTreatment::Mitc4, ShearTreatment::Sri, ShearTreatment::Mitc4Plus, ShearTreatment::Mitc4PlusCentre] {
+            for thickness_points in 1..=5 {
+                let sec = Section { thickness_points, ..section(shear, false) };
+                assert!(SectionRule::new(&sec).unwrap().fits(), "{shear:?}, {thickness_points} points");
+            }
+        }
     }
 
     #[test]
     fn tangent_matches_central_differences_of_residual() {
         let (x0, d0) = geometry();
-        for shear in [ShearTreatment::Mitc4, ShearTreatment::Sri] {
-            for nh in [false, true] {
-                let sec = section(shear, nh);
+        for shear in [ShearTreatment::Mitc4, ShearTreatment::Sri, ShearTreatment::Mitc4Plus, ShearTreatment::Mitc4PlusCentre] {
+            for material in ["SVK", "neo-Hookean", "fabric"] {
+                let sec = section_of(shear, material);
                 let el = ShellElement { x0, d0, grain: None, section: &sec };
                 // A strongly deformed state: stretch, shear, large rotation of the directors.
                 let mut u = ElemVec::zeros();
@@ -601,7 +698,7 @@ mod tests {
                     let de = (el.response(&xp, &fp, false).unwrap().energy - el.response(&xm, &fm, false).unwrap().energy) / (2.0 * h);
                     assert!((de - out.force[j]).abs() < 1e-6 * out.force.abs().max(), "force {j}: {de} vs {}", out.force[j]);
                 }
-                assert!(worst < 1e-6, "{shear:?} nh={nh}: tangent error {worst}");
+                assert!(worst < 1e-6, "{shear:?} {material}: tangent error {worst}");
                 // Symmetric tangent of a conservative element.
                 assert!((*k - k.transpose()).abs().max() < 1e-9 * scale);
             }
@@ -611,9 +708,9 @@ mod tests {
     #[test]
     fn rigid_rotation_of_any_size_is_strain_free() {
         let (x0, d0) = geometry();
-        let sec = section(ShearTreatment::Mitc4, true);
-        let el = ShellElement { x0, d0, grain: None, section: &sec };
-        for deg in [170.0f64, 400.0] {
+        for (shear, deg) in [(ShearTreatment::Mitc4, 170.0f64), (ShearTreatment::Mitc4, 400.0), (ShearTreatment::Mitc4Plus, 170.0), (ShearTreatment::Mitc4Plus, 400.0), (ShearTreatment::Mitc4PlusCentre, 400.0)] {
+            let sec = section(shear, true);
+            let el = ShellElement { x0, d0, grain: None, section: &sec };
             let axis = Unit::new_normalize(Vector3::new(0.3, -0.5, 0.8));
             // Apply in 20 increments through the nodal update path.
             let mut x = x0;
@@ -626,7 +723,7 @@ mod tests {
             }
             let u: [Vector3<f64>; 4] = std::array::from_fn(|a| x[a] - x0[a]);
             let e = el.response(&u, &f, false).unwrap().energy;
-            assert!(e.abs() < 1e-14, "{deg}°: energy {e}");
+            assert!(e.abs() < 1e-14, "{shear:?} {deg}°: energy {e}");
         }
     }
 }

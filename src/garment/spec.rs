@@ -33,6 +33,10 @@ pub struct GarmentSpec {
     /// panel written without an `outline` (matched by piece name).
     #[serde(default)]
     pub pattern: Option<PatternSource>,
+    /// Element formulation of every ply (default MITC4; `Mitc4Plus`/`Mitc4PlusCentre` for
+    /// assumed membrane strains on curved, distorted panel meshes).
+    #[serde(default)]
+    pub shear: crate::element::ShearTreatment,
 }
 
 /// A pattern file (see `crate::pattern`).

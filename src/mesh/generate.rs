@@ -7,7 +7,7 @@
 //! the first (node count `(nu+1)*nv`). Each generated mesh is checked with
 //! [`ShellMesh::validate`] before it is returned.
 
-use super::{MeshError, ShellMesh};
+use super::{MeshError, ShellMesh, Spacing};
 use nalgebra::Vector3;
 use std::collections::BTreeMap;
 use std::f64::consts::{FRAC_PI_2, TAU};
@@ -18,6 +18,14 @@ pub const MAX_NODES: usize = 20_000_000;
 
 /// Relative tolerance for recognising an angular span of a full turn.
 const FULL_TURN_TOL: f64 = 1e-9;
+
+/// A closed (full-turn) grid must be uniformly spaced: the distorted pattern is not periodic.
+fn closed_uniform(closed: bool, spacing: Spacing) -> Result<(), MeshError> {
+    if closed && spacing != Spacing::Uniform {
+        return Err(MeshError::Invalid("a distorted spacing needs an open panel (not a full turn)".into()));
+    }
+    Ok(())
+}
 
 fn positive(name: &str, value: f64) -> Result<(), MeshError> {
     if value.is_finite() && value > 0.0 {
@@ -215,15 +223,31 @@ pub fn cylindrical_panel(
     n_axial: usize,
     n_circ: usize,
 ) -> Result<ShellMesh, MeshError> {
+    cylindrical_panel_spaced(radius, length, theta0, theta1, n_axial, n_circ, Spacing::Uniform)
+}
+
+/// [`cylindrical_panel`] with the nodes spaced in (x, θ) by `spacing` (an open panel only
+/// for [`Spacing::Distorted`]); nodes and directors on the exact cylinder.
+pub fn cylindrical_panel_spaced(
+    radius: f64,
+    length: f64,
+    theta0: f64,
+    theta1: f64,
+    n_axial: usize,
+    n_circ: usize,
+    spacing: Spacing,
+) -> Result<ShellMesh, MeshError> {
     positive("radius", radius)?;
     positive("length", length)?;
     let (span, closed) = angular_span("theta0", theta0, "theta1", theta1)?;
     count("n_axial", n_axial, 1)?;
     count("n_circ", n_circ, if closed { 3 } else { 1 })?;
+    closed_uniform(closed, spacing)?;
     let g = Grid::new(n_axial, n_circ, closed)?;
     let mut m = g.build(|i, j| {
-        let x = length * i as f64 / n_axial as f64;
-        let t = theta0 + span * j as f64 / n_circ as f64;
+        let (fx, ft) = spacing.point(i, j, n_axial, n_circ);
+        let x = length * fx;
+        let t = theta0 + span * ft;
         let (s, c) = t.sin_cos();
         (
             Vector3::new(x, radius * s, radius * c),
@@ -257,6 +281,20 @@ pub fn hemisphere(
     n_merid: usize,
     n_circ: usize,
 ) -> Result<ShellMesh, MeshError> {
+    hemisphere_spaced(radius, hole_angle, phi0, phi1, n_merid, n_circ, Spacing::Uniform)
+}
+
+/// [`hemisphere`] with the nodes spaced in (α, φ) by `spacing` (an open segment only for
+/// [`Spacing::Distorted`]); nodes and directors on the exact sphere.
+pub fn hemisphere_spaced(
+    radius: f64,
+    hole_angle: f64,
+    phi0: f64,
+    phi1: f64,
+    n_merid: usize,
+    n_circ: usize,
+    spacing: Spacing,
+) -> Result<ShellMesh, MeshError> {
     positive("radius", radius)?;
     if !(hole_angle.is_finite() && hole_angle > 0.0 && hole_angle < FRAC_PI_2) {
         return Err(MeshError::Invalid(format!(
@@ -266,10 +304,12 @@ pub fn hemisphere(
     let (span, closed) = angular_span("phi0", phi0, "phi1", phi1)?;
     count("n_merid", n_merid, 1)?;
     count("n_circ", n_circ, if closed { 3 } else { 1 })?;
+    closed_uniform(closed, spacing)?;
     let g = Grid::new(n_merid, n_circ, closed)?;
     let mut m = g.build(|i, j| {
-        let a = hole_angle + (FRAC_PI_2 - hole_angle) * i as f64 / n_merid as f64;
-        let p = phi0 + span * j as f64 / n_circ as f64;
+        let (fa, fp) = spacing.point(i, j, n_merid, n_circ);
+        let a = hole_angle + (FRAC_PI_2 - hole_angle) * fa;
+        let p = phi0 + span * fp;
         // exact z = 0 on the equator
         let (sa, ca) = if i == n_merid {
             (1.0, 0.0)

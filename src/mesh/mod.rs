@@ -16,8 +16,10 @@ use std::fmt;
 pub mod generate;
 pub mod obj;
 pub mod select;
+pub mod spacing;
 
-pub use generate::{annulus, annulus_rings, cylindrical_panel, focused_rings, hemisphere, rectangle, slit_annulus, twisted_strip};
+pub use generate::{annulus, annulus_rings, cylindrical_panel, cylindrical_panel_spaced, focused_rings, hemisphere, hemisphere_spaced, rectangle, slit_annulus, twisted_strip};
+pub use spacing::Spacing;
 pub use obj::{from_obj, read_obj};
 pub use select::{select_box, select_edge, select_nearest, select_plane};
 

@@ -245,11 +245,11 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
     };
     let mut garment_first_node = Vec::new();
     let garment_first_part = parts.len();
-    if let Some((_, gm)) = &garment {
+    if let Some((g, gm)) = &garment {
         for gp in &gm.parts {
             let material = materials.get(gp.material.as_str()).cloned().ok_or_else(|| loc.at_value(&gp.name, &gp.material, "garment.plies", "unknown material"))?;
             let (first_node, first_element) = (x0.len(), elements.len());
-            sections.push(Section { thickness: gp.thickness, shear: Default::default(), thickness_points: 2, material });
+            sections.push(Section { thickness: gp.thickness, shear: g.shear, thickness_points: 2, material });
             for (q, g) in gp.mesh.quads.iter().zip(&gp.grains) {
                 elements.push(ElementDef { nodes: q.map(|n| n + first_node), section: sections.len() - 1, part: parts.len(), grain: Some(*g) });
             }
@@ -687,11 +687,11 @@ fn make_mesh(spec: &MeshSpec, base_dir: &Path) -> Result<ShellMesh, mesh::MeshEr
     let rad = f64::to_radians;
     match *spec {
         MeshSpec::Rectangle { lx, ly, nx, ny } => mesh::rectangle(lx, ly, nx, ny),
-        MeshSpec::CylindricalPanel { radius, length, theta0, theta1, n_axial, n_circ } => {
-            mesh::cylindrical_panel(radius, length, rad(theta0), rad(theta1), n_axial, n_circ)
+        MeshSpec::CylindricalPanel { radius, length, theta0, theta1, n_axial, n_circ, spacing } => {
+            mesh::cylindrical_panel_spaced(radius, length, rad(theta0), rad(theta1), n_axial, n_circ, spacing)
         }
-        MeshSpec::Hemisphere { radius, hole_angle, phi0, phi1, n_merid, n_circ } => {
-            mesh::hemisphere(radius, rad(hole_angle), rad(phi0), rad(phi1), n_merid, n_circ)
+        MeshSpec::Hemisphere { radius, hole_angle, phi0, phi1, n_merid, n_circ, spacing } => {
+            mesh::hemisphere_spaced(radius, rad(hole_angle), rad(phi0), rad(phi1), n_merid, n_circ, spacing)
         }
         MeshSpec::SlitAnnulus { ri, ro, nr, ntheta } => mesh::slit_annulus(ri, ro, nr, ntheta),
         MeshSpec::Annulus { ri, ro, nr, ntheta, graded } => mesh::annulus(ri, ro, nr, ntheta, graded),

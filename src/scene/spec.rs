@@ -5,6 +5,7 @@ use std::collections::BTreeMap;
 use serde::{Deserialize, Serialize};
 
 use crate::element::ShearTreatment;
+use crate::mesh::Spacing;
 use crate::solver::{SolverSettings, StepKind};
 
 /// A whole analysis: parts, materials, supports, loads, steps and outputs.
@@ -303,10 +304,29 @@ pub enum MeshSpec {
     /// Plate in the xy plane, x ∈ [0, lx], y ∈ [0, ly]. Edges xmin, xmax, ymin, ymax.
     Rectangle { lx: f64, ly: f64, nx: usize, ny: usize },
     /// Cylindrical panel about the x axis, point (x, R sin θ, R cos θ). Edges x0, x1,
-    /// theta0, theta1.
-    CylindricalPanel { radius: f64, length: f64, theta0: f64, theta1: f64, n_axial: usize, n_circ: usize },
-    /// Spherical shell with a polar hole. Edges hole, equator, phi0, phi1.
-    Hemisphere { radius: f64, hole_angle: f64, phi0: f64, phi1: f64, n_merid: usize, n_circ: usize },
+    /// theta0, theta1. `spacing: Distorted` divides each edge 1:2:…:N (open panels).
+    CylindricalPanel {
+        radius: f64,
+        length: f64,
+        theta0: f64,
+        theta1: f64,
+        n_axial: usize,
+        n_circ: usize,
+        #[serde(default)]
+        spacing: Spacing,
+    },
+    /// Spherical shell with a polar hole. Edges hole, equator, phi0, phi1. `spacing` as for
+    /// the cylindrical panel.
+    Hemisphere {
+        radius: f64,
+        hole_angle: f64,
+        phi0: f64,
+        phi1: f64,
+        n_merid: usize,
+        n_circ: usize,
+        #[serde(default)]
+        spacing: Spacing,
+    },
     /// Flat annulus with a radial slit at θ = 0. Edges inner, outer, slit_start, slit_end.
     SlitAnnulus { ri: f64, ro: f64, nr: usize, ntheta: usize },
     /// Strip along x, cross-section twisted linearly by `twist`. Edges x0, x1, smin, smax.
