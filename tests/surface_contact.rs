@@ -93,3 +93,66 @@ fn fabric_patch_slides_on_a_slope_above_the_friction_angle() {
     assert!((t - 0.3).abs() < 1e-9, "ran to {t}");
     assert!((ux / exact - 1.0).abs() < 0.1, "slid {ux} m vs Coulomb {exact} m");
 }
+
+/// `garments/nbc_sleeve.ron` (three plies 0.4/1.5/0.3 mm rolled on a 6 cm cylinder, an
+/// underarm seam, three quilting lines, hung under its weight) with barrier contact between
+/// its plies and of each ply with itself, friction `mu`, in its Static step (4 increments)
+/// or a Dynamic step to rest.
+fn nbc_sleeve(mu: f64, dynamic: bool) -> String {
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/garments/nbc_sleeve.ron");
+    let text = std::fs::read_to_string(path).expect("nbc_sleeve.ron");
+    let text = text.replace("        stitch_lines: [", &format!("        interply: (enabled: true, friction: {mu}, formulation: Barrier()),\n        stitch_lines: ["));
+    if dynamic {
+        let step = r#"(name: "hang", increments: 4, scale: {"outer_weight": 1.0, "carbon_weight": 1.0, "liner_weight": 1.0}),"#;
+        assert!(text.contains(step), "the sleeve's step");
+        text.replace(step, r#"(name: "hang", increments: 1, scale: {"outer_weight": 1.0, "carbon_weight": 1.0, "liner_weight": 1.0}, kind: Dynamic(())),"#)
+    } else {
+        text
+    }
+}
+
+/// The issue's must-show: the NBC sleeve solves with inter-ply and self contact on, and no two
+/// triangles of its plies, thickened to the contact thickness (1 − f) h (f = 0.2, the default
+/// barrier share), overlap at the end (`contact::intersection`, GJK); the plies settle within
+/// the compression tolerance (5 % of the thinner ply) of their thickness; a Dynamic step ends
+/// at rest.
+fn check_sleeve(mu: f64, dynamic: bool) {
+    let (built, state, reports, seconds) = solve(&nbc_sleeve(mu, dynamic));
+    let model = &built.model;
+    let parts: Vec<usize> = (0..model.parts.len()).collect();
+    let overlaps = plyshell::contact::intersection::intersecting_prisms(model, &state, &parts, 1.0 - 0.2);
+    let contact = reports.iter().rev().find_map(|r| r.extra.iter().rev().find_map(|v| v.get("surface_contact").cloned())).expect("surface contact report");
+    let iterations: usize = reports.iter().map(|r| r.iterations).sum();
+    let (pairs, ratio) = (contact["point_triangle"].as_u64().unwrap_or(0) + contact["edge_edge"].as_u64().unwrap_or(0), contact["min_gap_ratio"].as_f64().unwrap_or(0.0));
+    println!(
+        "NBC sleeve, μ = {mu}, {}: {} increments, {iterations} Newton iterations, {seconds:.1} s; {pairs} active pairs ({:.1} per node), min gap {ratio:.3} d̂, {} sliding; {} overlapping prisms",
+        if dynamic { "Dynamic" } else { "Static" },
+        reports.len(),
+        contact["pairs_per_node"].as_f64().unwrap_or(0.0),
+        contact["sliding"],
+        overlaps.len()
+    );
+    if dynamic {
+        assert!(reports.last().and_then(|r| r.dynamics.as_ref()).is_some_and(|d| d.at_rest), "not at rest");
+    }
+    assert!(pairs > 0, "no pair in contact");
+    assert!(overlaps.is_empty(), "{} overlapping prisms, first {:?}", overlaps.len(), overlaps.first());
+    // Compression d̂ − d ≤ 5 % of the thinner ply, with d̂ = 0.2 c̄ ≥ 0.2 × 0.35 mm: at least
+    // the gap ratio 1 − 0.05 × 0.3 / (0.2 × 0.35) = 0.79 (the liner–carbon pair, the tightest).
+    assert!(ratio > 0.0 && ratio >= 1.0 - 0.05 * 0.3 / (0.2 * 0.35) - 1e-9, "compressed to a gap of {ratio} d̂");
+}
+
+#[test]
+fn nbc_sleeve_static_frictionless_with_surface_contact() {
+    check_sleeve(0.0, false);
+}
+
+#[test]
+fn nbc_sleeve_static_with_friction_and_surface_contact() {
+    check_sleeve(0.3, false);
+}
+
+#[test]
+fn nbc_sleeve_dynamic_with_friction_and_surface_contact() {
+    check_sleeve(0.3, true);
+}

@@ -24,8 +24,7 @@
 //! massless), κ_p the mean over the pair's nodes; doubled for every node of a pair found at a
 //! converged state closer than 5 % of d̂_p (IPC §4.3) or compressed (d̂_p − d) by more than
 //! `compression_tolerance` of the thinner ply's thickness — so a pressed stack settles to
-//! within that tolerance of its thickness. The tangent is a Gauss–Newton one (see
-//! `evaluate`), positive semi-definite.
+//! within that tolerance of its thickness. The tangent is the exact Hessian (see `evaluate`).
 //!
 //! Friction: lagged smoothed Coulomb friction (IPC §5) on the relative position r = Σ w̄_k x_k
 //! of the pair's closest points, with the weights w̄, normal n̄ and normal force λ̄ of the last
@@ -41,7 +40,7 @@
 use std::collections::HashMap;
 use std::time::Instant;
 
-use nalgebra::{Matrix3, SMatrix, SymmetricEigen, Vector3};
+use nalgebra::{Matrix3, SMatrix, Vector3};
 use rayon::prelude::*;
 use serde::Serialize;
 
@@ -246,23 +245,6 @@ fn find(rep: &mut [usize], a: usize) -> usize {
     r
 }
 
-/// Projection of a symmetric 12×12 matrix onto the positive semi-definite cone.
-fn psd12(m: &SMatrix<f64, 12, 12>) -> SMatrix<f64, 12, 12> {
-    let e = SymmetricEigen::new(*m);
-    if e.eigenvalues.iter().all(|&l| l >= 0.0) {
-        return *m;
-    }
-    let mut out = SMatrix::<f64, 12, 12>::zeros();
-    for k in 0..12 {
-        let l = e.eigenvalues[k];
-        if l > 0.0 {
-            let v = e.eigenvectors.column(k);
-            out += v * v.transpose() * l;
-        }
-    }
-    out
-}
-
 impl SurfaceContact {
     /// Surface contact of `setup.parts` of `model`.
     pub fn new(model: &Model, setup: &SurfaceSetup) -> Self {
@@ -465,42 +447,31 @@ impl SurfaceContact {
                     return Some(term);
                 }
                 let (b, b1, b2) = barrier(gap, c.dhat);
-                // ∂dist/∂x_k = w_k n (the closest points are stationary: envelope theorem).
-                let gd: [f64; 12] = std::array::from_fn(|i| weights[i / 3] * normal[i % 3]);
-                let mollified = if kind == Kind::EdgeEdge {
+                // κ b(√s − c_p) (× m(|e_a × e_b|²) for nearly parallel edges) in second-order
+                // automatic differentiation: the exact gradient and Hessian. The Hessian is
+                // not projected: a pair pressed onto a vertex or an edge of the other surface
+                // has a negative tangential stiffness κ b′ ∇²dist (the force turns as the point
+                // slides), and Newton without it stalls where plies slide on each other
+                // (the NBC sleeve in a static step stopped at a residual of 10⁻⁶ with a
+                // projected or Gauss–Newton tangent; it converges with the exact one).
+                let sd = squared_distance(feat, &xs);
+                let (dd, ddd) = (0.5 / dist, -0.25 / (dist * dist * dist));
+                let mut e = sd.chain(kap * b, kap * b1 * dd, kap * (b2 * dd * dd + b1 * ddd));
+                let mut m = 1.0;
+                if kind == Kind::EdgeEdge {
                     let (u, v) = (xs[1] - xs[0], xs[3] - xs[2]);
-                    let (mv, _, _) = mollifier(u.cross(&v).norm_squared(), c.eps);
-                    mv < 1.0
-                } else {
-                    false
-                };
-                if !mollified {
-                    term.energy = kap * b;
-                    term.force = -kap * b1;
-                    term.grad = gd.map(|g| kap * b1 * g);
-                    if hessian {
-                        // Gauss–Newton: κ b″ ∇d ∇dᵀ. The dropped κ b′ ∇²d is of order
-                        // κ|b′|/dist against κ b″ — small, as dist ≥ c_p ≫ d — and the
-                        // tangent stays positive semi-definite without projection.
-                        let k2 = kap * b2;
-                        term.hess = Some(Box::new(SMatrix::<f64, 12, 12>::from_fn(|i, j| k2 * gd[i] * gd[j])));
+                    if u.cross(&v).norm_squared() < c.eps {
+                        let cs = cross_squared(&xs);
+                        let (mv, m1, m2) = mollifier(cs.v, c.eps);
+                        m = mv;
+                        e = e * cs.chain(mv, m1, m2);
                     }
-                } else {
-                    // Nearly parallel edges: m b with the mollifier m(|e_a × e_b|²), whose
-                    // curvature is not small (m′ ~ 1/ε): the exact Hessian (second-order
-                    // automatic differentiation), projected onto the PSD cone.
-                    let cs = cross_squared(&xs);
-                    let (mv, m1, m2) = mollifier(cs.v, c.eps);
-                    let sd = squared_distance(feat, &xs);
-                    let (dd, ddd) = (0.5 / dist, -0.25 / (dist * dist * dist));
-                    let e = sd.chain(kap * b, kap * b1 * dd, kap * (b2 * dd * dd + b1 * ddd)) * cs.chain(mv, m1, m2);
-                    term.energy = e.v;
-                    term.force = -kap * mv * b1;
-                    term.grad = e.g;
-                    if hessian {
-                        let h = SMatrix::<f64, 12, 12>::from_fn(|i, j| 0.5 * (e.h[i][j] + e.h[j][i]));
-                        term.hess = Some(Box::new(psd12(&h)));
-                    }
+                }
+                term.energy = e.v;
+                term.force = -kap * m * b1;
+                term.grad = e.g;
+                if hessian {
+                    term.hess = Some(Box::new(SMatrix::<f64, 12, 12>::from_fn(|i, j| 0.5 * (e.h[i][j] + e.h[j][i]))));
                 }
                 Some(term)
             })
