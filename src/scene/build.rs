@@ -249,7 +249,10 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
         for gp in &gm.parts {
             let material = materials.get(gp.material.as_str()).cloned().ok_or_else(|| loc.at_value(&gp.name, &gp.material, "garment.plies", "unknown material"))?;
             let (first_node, first_element) = (x0.len(), elements.len());
-            sections.push(Section { thickness: gp.thickness, shear: g.shear, thickness_points: 2, material });
+            // The material's own rule (a fabric's split of membrane and bending stiffness needs
+            // its thickness points; with two, any fabric bent as A h²/12 whatever its B).
+            let thickness_points = material.thickness_points().unwrap_or(2);
+            sections.push(Section { thickness: gp.thickness, shear: g.shear, thickness_points, material });
             for (q, g) in gp.mesh.quads.iter().zip(&gp.grains) {
                 elements.push(ElementDef { nodes: q.map(|n| n + first_node), section: sections.len() - 1, part: parts.len(), grain: Some(*g) });
             }
