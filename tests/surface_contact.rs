@@ -95,13 +95,15 @@ fn fabric_patch_slides_on_a_slope_above_the_friction_angle() {
 }
 
 /// `garments/nbc_sleeve.ron` (three plies 0.4/1.5/0.3 mm rolled on a 6 cm cylinder, an
-/// underarm seam, three quilting lines, hung under its weight) with barrier contact between
-/// its plies and of each ply with itself, friction `mu`, in its Static step (4 increments)
-/// or a Dynamic step to rest.
+/// underarm seam, three quilting lines, hung under its weight; shipped with barrier contact
+/// between its plies and of each ply with itself) with friction `mu`, in its Static step (4
+/// increments) or a Dynamic step to rest.
 fn nbc_sleeve(mu: f64, dynamic: bool) -> String {
     let path = concat!(env!("CARGO_MANIFEST_DIR"), "/garments/nbc_sleeve.ron");
     let text = std::fs::read_to_string(path).expect("nbc_sleeve.ron");
-    let text = text.replace("        stitch_lines: [", &format!("        interply: (enabled: true, friction: {mu}, formulation: Barrier()),\n        stitch_lines: ["));
+    let shipped = "interply: (enabled: true, friction: 0.3, formulation: Barrier()),";
+    assert!(text.contains(shipped), "the shipped sleeve's contact");
+    let text = text.replace(shipped, &format!("interply: (enabled: true, friction: {mu}, formulation: Barrier()),"));
     if dynamic {
         let step = r#"(name: "hang", increments: 4, scale: {"outer_weight": 1.0, "carbon_weight": 1.0, "liner_weight": 1.0}),"#;
         assert!(text.contains(step), "the sleeve's step");

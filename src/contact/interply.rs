@@ -166,14 +166,12 @@ impl Default for InterplyFormulation {
 #[derive(Clone, Debug, Serialize, serde::Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct InterplySpec {
-    /// Contact between adjacent plies of every multi-ply panel. Default off for now: the
-    /// hanging NBC sleeve (`garments/nbc_sleeve.ron`, three plies rolled on a cylinder with
-    /// 19 facets round) does not converge with it, in a Static or a Dynamic step. A liner node
-    /// inside the faceted carbon cylinder (the concave side) projects into two neighbouring
-    /// facets at nearly equal distance; its closest facet, and with it the force direction,
-    /// switches by the 19° between their normals, and Newton 2-cycles. Flat or gently bent
-    /// plies (`tests/interply.rs`) are unaffected. The cure is a smooth normal field
-    /// (interpolated nodal normals) for the master surface.
+    /// Contact between the plies (default off). With the `Penalty` formulation (default) the
+    /// hanging NBC sleeve does not converge: a liner node inside the faceted carbon cylinder
+    /// projects into two neighbouring facets at nearly equal distance, its closest facet — and
+    /// with it the force direction — switches by the 19° between their normals, and Newton
+    /// 2-cycles. The `Barrier` formulation has no closest facet (a smooth sum over all
+    /// point–triangle and edge–edge pairs) and solves it (`garments/nbc_sleeve.ron`).
     pub enabled: bool,
     /// Penalty (default) or barrier formulation.
     pub formulation: InterplyFormulation,
