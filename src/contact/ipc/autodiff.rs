@@ -78,8 +78,15 @@ impl<const N: usize> Add for Hd<N> {
 
 impl<const N: usize> Sub for Hd<N> {
     type Output = Self;
-    fn sub(self, o: Self) -> Self {
-        self + (-o)
+    fn sub(mut self, o: Self) -> Self {
+        self.v -= o.v;
+        for i in 0..N {
+            self.g[i] -= o.g[i];
+            for j in 0..N {
+                self.h[i][j] -= o.h[i][j];
+            }
+        }
+        self
     }
 }
 

@@ -138,8 +138,35 @@ fn point_segment_feature(p: &Vector3<f64>, a: &Vector3<f64>, b: &Vector3<f64>) -
 /// Squared distance of the features `f` of the four points `x`, with its gradient and
 /// Hessian with respect to the 12 coordinates (slot k: variables 3k..3k+3).
 pub fn squared_distance(f: Feature, x: &[Vector3<f64>; 4]) -> Hd<12> {
-    let p: [Hv<12>; 4] = std::array::from_fn(|k| point(&x[k], k));
-    squared_distance_of(f, &p)
+    // Differentiated only in the slots the feature involves (6 or 9 variables for point–point
+    // and point–edge: a quarter and a half of the work), then expanded to the 12.
+    match f {
+        Feature::PointPoint(i, j) => expanded::<6>(f, x, &[i, j]),
+        Feature::PointEdge(i, j, k) => expanded::<9>(f, x, &[i, j, k]),
+        _ => {
+            let p: [Hv<12>; 4] = std::array::from_fn(|k| point(&x[k], k));
+            squared_distance_of(f, &p)
+        }
+    }
+}
+
+/// [`squared_distance_of`] with variables only for `slots` (N = 3 × their number), its
+/// gradient and Hessian expanded to the 12 coordinates of the four slots.
+fn expanded<const N: usize>(f: Feature, x: &[Vector3<f64>; 4], slots: &[usize]) -> Hd<12> {
+    let p: [Hv<N>; 4] = std::array::from_fn(|k| match slots.iter().position(|&s| s == k) {
+        Some(c) => point(&x[k], c),
+        None => [Hd::c(x[k].x), Hd::c(x[k].y), Hd::c(x[k].z)],
+    });
+    let r = squared_distance_of(f, &p);
+    let at = |c: usize| 3 * slots[c / 3] + c % 3;
+    let mut out = Hd::<12>::c(r.v);
+    for ci in 0..N {
+        out.g[at(ci)] = r.g[ci];
+        for cj in 0..N {
+            out.h[at(ci)][at(cj)] = r.h[ci][cj];
+        }
+    }
+    out
 }
 
 /// Squared distance of the features `f` (value only).
