@@ -361,7 +361,6 @@ impl NodalForces for BarrierContact {
     /// the segment, g_min = (1 − CCD_CLOSE) g₀, repeatedly until the end of the segment or
     /// until it no longer advances (then that fraction is the bound).
     fn max_step(&self, model: &Model, from: &State, to: &State) -> f64 {
-        let t0 = Instant::now();
         let s = (0..self.nodes.len())
             .into_par_iter()
             .map(|i| {
@@ -409,7 +408,6 @@ impl NodalForces for BarrierContact {
                 smin
             })
             .reduce(|| 1.0, f64::min);
-        let _ = t0;
         s
     }
 
