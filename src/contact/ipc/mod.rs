@@ -3,6 +3,7 @@
 
 pub mod autodiff;
 pub mod broad_phase;
+mod friction;
 pub mod primitives;
 pub mod surface;
 

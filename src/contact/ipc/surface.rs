@@ -45,6 +45,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use super::broad_phase::candidates;
+use super::friction::{Friction, FrictionTerm};
 use super::primitives::{cross_squared, edge_edge_feature, mollifier, point_triangle_feature, squared_distance, squared_distance_value, Feature};
 use crate::contact::barrier::barrier;
 use crate::element::NODE_DOFS;
@@ -125,7 +126,7 @@ pub struct SurfaceSetup {
 
 /// Kind of a pair.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-enum Kind {
+pub(super) enum Kind {
     PointTriangle,
     EdgeEdge,
 }
@@ -156,30 +157,6 @@ struct Term {
     weights: [f64; 4],
     grad: [f64; 12],
     hess: Option<Box<SMatrix<f64, 12, 12>>>,
-}
-
-/// Committed friction state of a pair.
-#[derive(Clone, Debug)]
-struct Friction {
-    nodes: [usize; 4],
-    weights: [f64; 4],
-    normal: Vector3<f64>,
-    force: f64,
-    anchor: Vector3<f64>,
-    delta: f64,
-    sliding: bool,
-    slip: f64,
-}
-
-/// Friction of one committed pair at a configuration.
-struct FrictionTerm {
-    key: (Kind, usize, usize),
-    nodes: [usize; 4],
-    energy: f64,
-    grad: [f64; 12],
-    hess: Option<SMatrix<f64, 12, 12>>,
-    /// Friction force on slot 0 (the point or the first edge).
-    force: Vector3<f64>,
 }
 
 /// Per converged state: active pairs and forces.
@@ -480,40 +457,7 @@ impl SurfaceContact {
 
     /// Friction potentials of the committed pairs at `x`.
     fn friction_terms(&self, x: &(dyn Fn(usize) -> Vector3<f64> + Sync), hessian: bool) -> Vec<FrictionTerm> {
-        let mu = self.settings.friction;
-        if mu == 0.0 {
-            return Vec::new();
-        }
-        self.friction
-            .iter()
-            .filter(|(_, h)| h.force > 0.0)
-            .map(|(&key, h)| {
-                let r: Vector3<f64> = (0..4).map(|k| x(h.nodes[k]) * h.weights[k]).sum();
-                let p = Matrix3::identity() - h.normal * h.normal.transpose();
-                let s = p * (r - h.anchor);
-                let sn = s.norm();
-                let cap = mu * h.force;
-                let arg = sn / h.delta;
-                let energy = cap * h.delta * (arg + (-2.0 * arg).exp().ln_1p() - std::f64::consts::LN_2);
-                let (g3, k3) = if sn > 0.0 {
-                    let sh = s / sn;
-                    let th = arg.tanh();
-                    let along = cap / h.delta * (1.0 - th * th);
-                    let across = cap * th / sn;
-                    (sh * (cap * th), sh * sh.transpose() * (along - across) + p * across)
-                } else {
-                    (Vector3::zeros(), p * (cap / h.delta))
-                };
-                let mut grad = [0.0; 12];
-                for k in 0..4 {
-                    for a in 0..3 {
-                        grad[3 * k + a] = h.weights[k] * g3[a];
-                    }
-                }
-                let hess = hessian.then(|| SMatrix::<f64, 12, 12>::from_fn(|i, j| h.weights[i / 3] * h.weights[j / 3] * k3[(i % 3, j % 3)]));
-                FrictionTerm { key, nodes: h.nodes, energy, grad, hess, force: -g3 }
-            })
-            .collect()
+        super::friction::terms(&self.friction, self.settings.friction, x, hessian)
     }
 
     /// Pairs closer than zero gap at `state` (start intersecting): (nodes, gap).

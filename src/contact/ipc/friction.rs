@@ -1,0 +1,73 @@
+//! Lagged, smoothed Coulomb friction of surface contact pairs (IPC §5, Li et al. 2020): the
+//! committed state of a pair (anchor, closest-point weights, normal and normal force of the
+//! last converged state) and its friction potential.
+
+use std::collections::HashMap;
+
+use nalgebra::{Matrix3, SMatrix, Vector3};
+
+use super::surface::Kind;
+
+/// Committed friction state of a pair.
+#[derive(Clone, Debug)]
+pub(super) struct Friction {
+    pub(super) nodes: [usize; 4],
+    pub(super) weights: [f64; 4],
+    pub(super) normal: Vector3<f64>,
+    pub(super) force: f64,
+    pub(super) anchor: Vector3<f64>,
+    pub(super) delta: f64,
+    pub(super) sliding: bool,
+    pub(super) slip: f64,
+}
+
+/// Friction of one committed pair at a configuration.
+pub(super) struct FrictionTerm {
+    pub(super) key: (Kind, usize, usize),
+    pub(super) nodes: [usize; 4],
+    pub(super) energy: f64,
+    pub(super) grad: [f64; 12],
+    pub(super) hess: Option<SMatrix<f64, 12, 12>>,
+    /// Friction force on slot 0 (the point or the first edge).
+    pub(super) force: Vector3<f64>,
+}
+
+/// Friction potentials D = μλ̄ δ ln cosh(|s|/δ) of the committed pairs `map` at `x`, s the
+/// slip of the pair's weighted points from their anchor in the lagged tangent plane, with
+/// gradient and (when `hessian`) the exact Hessian, positive semi-definite.
+pub(super) fn terms(map: &HashMap<(Kind, usize, usize), Friction>, mu: f64, x: &(dyn Fn(usize) -> Vector3<f64> + Sync), hessian: bool) -> Vec<FrictionTerm> {
+    if mu == 0.0 {
+        return Vec::new();
+    }
+    map
+        .iter()
+        .filter(|(_, h)| h.force > 0.0)
+        .map(|(&key, h)| {
+            let r: Vector3<f64> = (0..4).map(|k| x(h.nodes[k]) * h.weights[k]).sum();
+            let p = Matrix3::identity() - h.normal * h.normal.transpose();
+            let s = p * (r - h.anchor);
+            let sn = s.norm();
+            let cap = mu * h.force;
+            let arg = sn / h.delta;
+            let energy = cap * h.delta * (arg + (-2.0 * arg).exp().ln_1p() - std::f64::consts::LN_2);
+            let (g3, k3) = if sn > 0.0 {
+                let sh = s / sn;
+                let th = arg.tanh();
+                let along = cap / h.delta * (1.0 - th * th);
+                let across = cap * th / sn;
+                (sh * (cap * th), sh * sh.transpose() * (along - across) + p * across)
+            } else {
+                (Vector3::zeros(), p * (cap / h.delta))
+            };
+            let mut grad = [0.0; 12];
+            for k in 0..4 {
+                for a in 0..3 {
+                    grad[3 * k + a] = h.weights[k] * g3[a];
+                }
+            }
+            let hess = hessian.then(|| SMatrix::<f64, 12, 12>::from_fn(|i, j| h.weights[i / 3] * h.weights[j / 3] * k3[(i % 3, j % 3)]));
+            FrictionTerm { key, nodes: h.nodes, energy, grad, hess, force: -g3 }
+        })
+        .collect()
+}
+
