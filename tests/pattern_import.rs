@@ -238,3 +238,40 @@ fn mutated_dxf_files_never_panic() {
     println!("2000 mutants: {ok} read, {errors} errors");
     assert!(ok > 0 && errors > 0);
 }
+
+/// A seam whose closing is a rigid motion: the shipped two-piece pattern with the right
+/// panel's top held only vertically (`Fix(Uz)` instead of `Clamp`), so sewing the 2 mm gap
+/// slides the right panel sideways without straining it. At the solution every force
+/// vanishes; the static increments must still converge (their residual measured against the
+/// forces the increment started with, not against round-off). Reference: the sewn state is
+/// the rigid translation of the right panel by the gap, (−2 mm, 0, 0), to 1e-9 m, with the
+/// left panel unmoved (1e-12 m).
+#[test]
+fn a_seam_closed_by_a_rigid_slide_converges() {
+    let dir = out_dir("rigid_slide");
+    let shipped = Path::new(env!("CARGO_MANIFEST_DIR")).join("garments/patterns");
+    std::fs::copy(shipped.join("two_piece.dxf"), dir.join("two_piece.dxf")).expect("copy the pattern");
+    let text = std::fs::read_to_string(shipped.join("two_piece.ron")).expect("shipped scene");
+    let text = text.replace(r#"Clamp(set: "right_top")"#, r#"Fix(set: "right_top", dofs: [Uz])"#);
+    assert!(text.contains(r#"Fix(set: "right_top", dofs: [Uz])"#));
+    let path = dir.join("two_piece_slide.ron");
+    std::fs::write(&path, &text).expect("write scene");
+    let (sc, built) = scene::load(&path).unwrap_or_else(|e| panic!("{e}"));
+    let model = &built.model;
+    let mut solver = plyshell::solver::Solver::new(model, sc.solver.clone()).unwrap_or_else(|e| panic!("{e}"));
+    let mut state = model.initial_state();
+    let mut iterations = 0;
+    solver.run(&built.steps[..1], &mut state, &mut |r, _, _| iterations += r.iterations, &mut |_| {}).unwrap_or_else(|e| panic!("{e}"));
+    let (mut right, mut left) = (0.0f64, 0.0f64);
+    for n in 0..model.n_nodes() {
+        let u = model.position(&state, n) - model.x0[n];
+        if model.x0[n].x > 0.201 {
+            right = right.max((u - nalgebra::Vector3::new(-0.002, 0.0, 0.0)).norm());
+        } else {
+            left = left.max(u.norm());
+        }
+    }
+    println!("sewn by a rigid slide in {iterations} Newton iterations: right panel off the translation by {right:.2e} m, left panel moved {left:.2e} m");
+    assert!(right < 1e-9, "right panel: {right}");
+    assert!(left < 1e-12, "left panel: {left}");
+}

@@ -597,8 +597,17 @@ impl<'m> Solver<'m> {
             Ok(e) => e,
             Err(f) => return failed(0, &residuals, Some(f.element), f.to_string()),
         };
+        // Force scale of the increment: the reference of its first iteration (the loads at
+        // the new level and the internal forces and reactions of the state it starts from)
+        // is a floor for the later ones, so that an increment whose forces vanish at the
+        // solution (a seam closing by a rigid motion, an unloading to zero) still measures
+        // its residual against the forces it had to balance (the time-averaged force of
+        // general-purpose FE codes), not against round-off.
+        let mut force_scale = None;
         for it in 0..self.settings.max_iterations {
-            let (rel, _) = self.residual(&mut r);
+            let (rel_now, reference) = self.residual(&mut r);
+            let floor = *force_scale.get_or_insert(reference);
+            let rel = rel_now * reference / reference.max(floor);
             residuals.push(rel);
             progress(it, rel);
             if !rel.is_finite() {
