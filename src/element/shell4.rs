@@ -224,31 +224,6 @@ fn add_pair_forces(sigma: &[f64], pairs: &[(usize, usize)], forms: &[Lin], curre
     }
 }
 
-/// Rows of the tangent's stacked B and DB: per point E11, E22, 2E13, 2E23 and the level's
-/// 2E12 row last with centre-sampled in-plane shear; all five rows per point without.
-const STACK: usize = 21;
-
-/// Scratch of the tangent, reused level after level: the upper triangle of Σ BᵀDB, the
-/// pairs' DOF-space rows and the stacked rows of B and DB.
-struct TangentScratch {
-    upper: Upper,
-    rows: [Row; MAX_PAIRS],
-    b_stack: [Row; STACK],
-    db_stack: [Row; STACK],
-}
-
-impl TangentScratch {
-    #[inline(always)]
-    fn zeroed() -> Self {
-        Self {
-            upper: [[0.0; ELEMENT_DOFS]; ELEMENT_DOFS],
-            rows: [[0.0; ELEMENT_DOFS]; MAX_PAIRS],
-            b_stack: [[0.0; ELEMENT_DOFS]; STACK],
-            db_stack: [[0.0; ELEMENT_DOFS]; STACK],
-        }
-    }
-}
-
 impl<'a> ShellElement<'a> {
     /// Internal force, tangent (if `with_tangent`) and energy in the configuration given by
     /// nodal displacements `u` and current director frames `frames`. Builds the section rule
@@ -352,17 +327,20 @@ impl<'a> ShellElement<'a> {
         // MITC4+: the membrane pairs, evaluated once for all levels.
         let tying = rule.membrane.as_ref();
         let mut mstate = tying.map(|m| MembraneState::new(m, &geom.tying, &rule.forms, &geom.forms, &df, &kin, with_tangent));
+        let mut upper: Upper = [[0.0; ELEMENT_DOFS]; ELEMENT_DOFS];
         let mut energy = 0.0;
         // Generalised forces on the kinematic vectors and the second-derivative matrix
         // S = X + Xᵀ over them.
         let mut fv = [Vector3::zeros(); NV];
         let mut x = [[0.0; NV]; NV];
         let mut first_point = 0;
-        // Tangent scratch; None on the residual-only path, which so never clears its 12 KB.
-        let mut scratch: Option<TangentScratch> = None;
-        if with_tangent {
-            scratch = Some(TangentScratch::zeroed());
-        }
+        // Scratch of the tangent, reused level after level: the pairs' DOF-space rows and the
+        // stacked rows of B and DB (per point E11, E22, 2E13, 2E23 and the level's 2E12 row
+        // last with centre-sampled in-plane shear; all five rows per point without).
+        const STACK: usize = 21;
+        let mut rows: [Row; MAX_PAIRS] = [[0.0; ELEMENT_DOFS]; MAX_PAIRS];
+        let mut b_stack: [Row; STACK] = [[0.0; ELEMENT_DOFS]; STACK];
+        let mut db_stack: [Row; STACK] = [[0.0; ELEMENT_DOFS]; STACK];
         for (level, centre_geom) in rule.levels.iter().zip(geom.centres.iter()) {
             let pairs = &level.pairs;
             let current = |f: usize| geom.forms[f] + df[f];
@@ -372,8 +350,8 @@ impl<'a> ShellElement<'a> {
                 *et = 0.5 * (pr.dot(&dq) + dp.dot(&qr) + dp.dot(&dq));
             }
             // DOF-space rows of the pairs: ∂(½ p·q)/∂DOF.
-            if let Some(ts) = scratch.as_mut() {
-                for (row, &(p, q)) in ts.rows.iter_mut().zip(pairs) {
+            if with_tangent {
+                for (row, &(p, q)) in rows.iter_mut().zip(pairs) {
                     *row = [0.0; ELEMENT_DOFS];
                     if p == q {
                         kin.chain_form(&rule.forms[p], &current(p), row);
@@ -396,8 +374,8 @@ impl<'a> ShellElement<'a> {
             first_point += level.points.len();
             // Row 2E12 of the level (the centre's), common to its points.
             let mut b_shear: Row = [0.0; ELEMENT_DOFS];
-            if let (Some(ts), true) = (scratch.as_ref(), rule.centre_shear) {
-                let mut bn_c = natural_rows(&level.centre.comps, &ts.rows);
+            if with_tangent && rule.centre_shear {
+                let mut bn_c = natural_rows(&level.centre.comps, &rows);
                 if let Some(ms) = &mstate {
                     ms.add_correction_rows(n_pts, &mut bn_c);
                 }
@@ -434,46 +412,40 @@ impl<'a> ShellElement<'a> {
                 if let (Some(m), Some(ms)) = (tying, mstate.as_mut()) {
                     ms.add_stress(&m.points[i], &geom.tying[i], sn.as_slice());
                 }
-                if let (Some(d), Some(ts), true) = (tangent, scratch.as_mut(), n_rows + 5 <= STACK) {
-                    let TangentScratch { rows, b_stack, db_stack, .. } = ts;
+                if let (Some(d), true) = (tangent, n_rows + 5 <= STACK) {
                     // B = M Bn (row 2E12 from the centre when sampled there), DB with D
                     // weighted by w det J.
-                    let mut bn = natural_rows(&rp.comps, rows);
+                    let mut bn = natural_rows(&rp.comps, &rows);
                     if let Some(ms) = &mstate {
                         ms.add_correction_rows(i, &mut bn);
                     }
-                    // The rows of B go straight into the stack (row 2E12, when sampled at
-                    // the centre, is the level's `b_shear`); `at[r]` is row r's slot.
-                    let mut at = [usize::MAX; 5];
-                    let mut slot = n_rows;
-                    for (r, ar) in at.iter_mut().enumerate() {
+                    let mut b: [Row; 5] = [[0.0; ELEMENT_DOFS]; 5];
+                    for (r, br) in b.iter_mut().enumerate() {
                         if r == 2 && rule.centre_shear {
+                            *br = b_shear;
                             continue;
                         }
-                        let br = &mut b_stack[slot];
-                        *br = [0.0; ELEMENT_DOFS];
                         for (c, bc) in bn.iter().enumerate() {
                             let m = pg.m[(r, c)];
                             br.iter_mut().zip(bc).for_each(|(x, y)| *x += m * y);
                         }
-                        *ar = slot;
-                        slot += 1;
                     }
                     let d = d * pg.wdet;
-                    for (r, &ar) in at.iter().enumerate() {
-                        let dbr: &mut Row = if ar == usize::MAX { &mut db_shear } else { &mut db_stack[ar] };
-                        let mut acc: Row = [0.0; ELEMENT_DOFS];
-                        for (q, &aq) in at.iter().enumerate() {
+                    let mut slot = n_rows;
+                    for r in 0..5 {
+                        let mut dbr: Row = [0.0; ELEMENT_DOFS];
+                        for (q, bq) in b.iter().enumerate() {
                             let dq = d[(r, q)];
                             if dq != 0.0 {
-                                let bq = if aq == usize::MAX { &b_shear } else { &b_stack[aq] };
-                                acc.iter_mut().zip(bq).for_each(|(x, y)| *x += dq * y);
+                                dbr.iter_mut().zip(bq).for_each(|(x, y)| *x += dq * y);
                             }
                         }
-                        if ar == usize::MAX {
-                            dbr.iter_mut().zip(&acc).for_each(|(x, y)| *x += y);
+                        if r == 2 && rule.centre_shear {
+                            db_shear.iter_mut().zip(&dbr).for_each(|(x, y)| *x += y);
                         } else {
-                            *dbr = acc;
+                            b_stack[slot] = b[r];
+                            db_stack[slot] = dbr;
+                            slot += 1;
                         }
                     }
                     n_rows = slot;
@@ -484,15 +456,14 @@ impl<'a> ShellElement<'a> {
                 if let (Some(m), Some(ms)) = (tying, mstate.as_mut()) {
                     ms.add_stress(&m.points[n_pts], &geom.tying[n_pts], sn_c.as_slice());
                 }
-                if let Some(ts) = scratch.as_mut() {
-                    ts.b_stack[n_rows] = b_shear;
-                    ts.db_stack[n_rows] = db_shear;
+                if with_tangent {
+                    b_stack[n_rows] = b_shear;
+                    db_stack[n_rows] = db_shear;
                     n_rows += 1;
                 }
             }
-            if let Some(ts) = scratch.as_mut() {
-                let TangentScratch { upper, b_stack, db_stack, .. } = ts;
-                add_upper_btc(upper, &b_stack[..n_rows], &db_stack[..n_rows]);
+            if with_tangent {
+                add_upper_btc(&mut upper, &b_stack[..n_rows], &db_stack[..n_rows]);
             }
             add_pair_forces(&sigma, pairs, &rule.forms, current, &mut fv, with_tangent.then_some(&mut x));
         }
@@ -510,9 +481,7 @@ impl<'a> ShellElement<'a> {
             force[5 * a + 4] = feff[a].dot(&frames[a].t2);
         }
         if let Some(k) = k.as_deref_mut() {
-            if let Some(ts) = scratch.as_ref() {
-                mirror_into(&ts.upper, k);
-            }
+            mirror_into(&upper, k);
             let d = frames.map(|f| f.d);
             add_geometric_tangent(k, &symmetric_part(&x), &fv, &feff, &kin, &d);
         }
