@@ -508,6 +508,9 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
     if sv.threads > MAX_THREADS {
         return Err(bad_solver("threads", format!("expected 0 (all cores) to {MAX_THREADS} threads, found {}", sv.threads)));
     }
+    if let Some(Err((field, msg))) = sv.chord.map(|c| c.validate()) {
+        return Err(loc.at(None, Some(field), format!("solver.chord.{field}"), msg));
+    }
 
     // Steps.
     if scene.steps.is_empty() {

@@ -561,7 +561,7 @@ impl<'m> Solver<'m> {
                 .map_err(|(failing, cause)| (failing.or_else(|| self.worst_element(&r)), format!("energy line search failed: {cause}")))
             } else {
                 // Backtracking along the Newton direction keeps the time step.
-                self.safeguarded_update(state, &du, scales, true).map_err(|failure| match failure {
+                self.safeguarded_update(state, &du, scales, true, true).map_err(|failure| match failure {
                     Some(f) => (Some(f.element), f.to_string()),
                     None => (None, "no admissible trial state along the Newton direction (a nodal-force term, e.g. contact with a node through a body, rejected every backtracked step)".into()),
                 })

@@ -1,6 +1,7 @@
 //! Nonlinear solution: load stepping with Newton–Raphson, line search and cut-back.
 
 pub mod arclength;
+pub mod chord;
 pub mod damped;
 pub mod diagnose;
 pub mod dynamics;
@@ -10,6 +11,7 @@ pub mod linear;
 pub mod newton;
 pub mod nodal;
 
+pub use chord::ChordSettings;
 pub use dynamics::{DynamicInfo, DynamicSettings, LumpedMass, TimeScheme};
 pub use eigen::BucklingReport;
 pub use nodal::NodalForces;
@@ -35,11 +37,14 @@ pub struct SolverSettings {
     pub max_cutbacks: usize,
     /// Worker threads for assembly and factorization (0 = all cores).
     pub threads: usize,
+    /// Chord (modified) Newton in static load-controlled increments: keep a factorization
+    /// while the residual contracts fast (`chord.rs`); None (the default) is full Newton.
+    pub chord: Option<ChordSettings>,
 }
 
 impl Default for SolverSettings {
     fn default() -> Self {
-        Self { max_iterations: 30, residual_tol: 1e-7, energy_tol: 1e-14, line_search: true, max_cutbacks: 10, threads: 0 }
+        Self { max_iterations: 30, residual_tol: 1e-7, energy_tol: 1e-14, line_search: true, max_cutbacks: 10, threads: 0, chord: None }
     }
 }
 

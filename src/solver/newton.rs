@@ -463,7 +463,9 @@ impl<'m> Solver<'m> {
     /// large rotations legitimately raise it for an iteration or two, and divergence is
     /// caught by the iteration limit and the cut-back. Returns the trial state's strain
     /// energy, or, with `state` restored, the last element failure (None: forces not finite).
-    pub(super) fn safeguarded_update(&mut self, state: &mut State, du: &[f64], scales: &[f64], backtrack: bool) -> Result<f64, Option<AssemblyFailure>> {
+    /// The trial state is assembled with its tangent when `tangent` is true, else the
+    /// residual alone (a linear step's last state; a chord iteration that keeps its factor).
+    pub(super) fn safeguarded_update(&mut self, state: &mut State, du: &[f64], scales: &[f64], backtrack: bool, tangent: bool) -> Result<f64, Option<AssemblyFailure>> {
         let base = state.clone();
         // Barrier terms: start at the largest collision-free fraction (continuous collision
         // detection), so that no iterate tunnels through a surface between two admissible
@@ -478,7 +480,7 @@ impl<'m> Solver<'m> {
         for _ in 0..6 {
             *state = base.clone();
             self.model.update(state, du, step);
-            match self.assemble(state, scales, true) {
+            match self.assemble(state, scales, tangent) {
                 Ok(e) if self.f_int.iter().chain(&self.f_ext).all(|v| v.is_finite()) => return Ok(e),
                 Ok(_) => last_failure = None,
                 Err(f) => last_failure = Some(f),
@@ -592,6 +594,7 @@ impl<'m> Solver<'m> {
         let mut residuals = Vec::new();
         let mut indefinite = false;
         let mut energy0 = None;
+        let mut chord = super::chord::Chord::new(self.settings.chord);
         self.model.apply_prescribed(state, scales);
         let mut energy = match self.assemble(state, scales, true) {
             Ok(e) => e,
@@ -620,6 +623,10 @@ impl<'m> Solver<'m> {
             if it > 0 {
                 let de: f64 = du.iter().zip(&r).map(|(a, b)| a * b).sum::<f64>().abs();
                 if self.converged(rel, de, energy0.unwrap_or(1.0)) {
+                    // The increment report's inertia needs the converged state's tangent.
+                    if let Err(f) = self.chord_tangent(&mut chord, state, scales) {
+                        return failed(it, &residuals, Some(f.element), f.to_string());
+                    }
                     return Attempt::Converged { iterations: it, residuals, indefinite, energy };
                 }
                 if it >= 3 && rel > 1e6 * residuals[0].max(1e-12) {
@@ -627,17 +634,25 @@ impl<'m> Solver<'m> {
                     return failed(it, &residuals, el, "Newton diverging (residual grew a millionfold)".into());
                 }
             }
-            // Solve K du = −r.
-            let t = Instant::now();
-            let kind = match self.cholesky.factorize(&self.values) {
-                Ok(k) => k,
-                Err(e) => {
-                    self.timings.factorization += t.elapsed().as_secs_f64();
-                    return failed(it, &residuals, None, format!("{e} (a mechanism: missing supports or an unconstrained node?)"));
+            // Solve K du = −r, with the last factorization while the chord iteration keeps it.
+            if chord.reuse(&residuals, self.timings.pattern_growths) {
+                chord.reused_factor();
+            } else {
+                if let Err(f) = self.chord_tangent(&mut chord, state, scales) {
+                    return failed(it, &residuals, Some(f.element), f.to_string());
                 }
-            };
-            self.timings.factorization += t.elapsed().as_secs_f64();
-            indefinite |= kind == FactorKind::Ldlt;
+                let t = Instant::now();
+                let kind = match self.cholesky.factorize(&self.values) {
+                    Ok(k) => k,
+                    Err(e) => {
+                        self.timings.factorization += t.elapsed().as_secs_f64();
+                        return failed(it, &residuals, None, format!("{e} (a mechanism: missing supports or an unconstrained node?)"));
+                    }
+                };
+                self.timings.factorization += t.elapsed().as_secs_f64();
+                chord.factorized(self.timings.pattern_growths);
+                indefinite |= kind == FactorKind::Ldlt;
+            }
             let t = Instant::now();
             du.iter_mut().zip(&r).for_each(|(d, r)| *d = -r);
             self.cholesky.solve(&mut du);
@@ -669,12 +684,18 @@ impl<'m> Solver<'m> {
             // against 237 Newton iterations with automatic increments; fixed increments
             // failed from one increment), as Newton on thin shells legitimately overshoots
             // the energy for an iteration or two.
-            let update = self.safeguarded_update(state, &du, scales, self.settings.line_search).map_err(|f| match f {
+            // A linear step needs no tangent at its solution; a chord iteration none while it
+            // keeps its factorization.
+            let tangent = !linear && chord.tangent_for_update(&residuals);
+            let update = self.safeguarded_update(state, &du, scales, self.settings.line_search, tangent).map_err(|f| match f {
                 Some(f) => f.to_string(),
                 None => "line search found no finite state".into(),
             });
             match update {
-                Ok(e) => energy = e,
+                Ok(e) => {
+                    energy = e;
+                    chord.tangent_current = tangent;
+                }
                 Err(cause) => {
                     let el = self.worst_element(&r);
                     return failed(it, &residuals, el, cause);
