@@ -1,6 +1,7 @@
 //! Nonlinear solution: load stepping with Newton–Raphson, line search and cut-back.
 
 pub mod arclength;
+mod automatic;
 pub mod chord;
 pub mod damped;
 pub mod diagnose;

@@ -1,0 +1,133 @@
+//! Automatic load incrementation of static steps (`automatic_increments: true`; Crisfield
+//! 1991, §9.4–9.5): increment sizes that follow the Newton iteration counts, an extrapolating
+//! predictor, and early cut-back on divergence.
+
+use super::linear::FactorKind;
+use super::newton::{Attempt, IncrementReport, Progress, SolveError, Solver, StepPlan};
+use crate::model::State;
+
+/// Extrapolating predictor of an automatic increment (Crisfield 1991, §9.4; the linear
+/// extrapolation of general-purpose FE codes): `state`, converged at the current load level,
+/// moves on by `ratio` × its change since `old` — translations linearly, each director by
+/// `ratio` × the rotation that took its previous direction to the current one (applied to the
+/// whole frame).
+fn extrapolate(state: &mut State, old: &State, ratio: f64) {
+    if !(ratio.is_finite() && ratio > 0.0) {
+        return;
+    }
+    let ratio = ratio.min(4.0);
+    for n in 0..state.u.len() {
+        let du = state.u[n] - old.u[n];
+        state.u[n] += du * ratio;
+        let (d0, d1) = (old.frames[n].d, state.frames[n].d);
+        let axis = d0.cross(&d1);
+        let s = axis.norm();
+        if s > 1e-14 {
+            let angle = s.atan2(d0.dot(&d1));
+            let r = nalgebra::Rotation3::from_scaled_axis(axis * (angle * ratio / s));
+            state.frames[n] = state.frames[n].rotated(&r);
+        }
+    }
+}
+
+impl Solver<'_> {
+    /// Automatic load incrementation of a static step (Crisfield 1991, §9.5; Abaqus-style
+    /// automatic increments): the first increment is 1/`increments` of the step, an increment
+    /// that converged within 8 iterations doubles the next (within 12: ×1.5; above 18: ×½),
+    /// and a failed one — stopped early when divergence shows ([`Solver::attempt`]) — is
+    /// retried at a quarter of its size. Every converged increment is reported; the step ends
+    /// exactly at its target scales. Returns the scales reached.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn run_automatic(
+        &mut self,
+        si: usize,
+        step: &StepPlan,
+        start: &[f64],
+        state: &mut State,
+        tracker: &mut super::arclength::StabilityTracker,
+        on_increment: &mut dyn FnMut(&IncrementReport, &State, &Self),
+        progress: &mut dyn FnMut(&Progress),
+    ) -> Result<Vec<f64>, SolveError> {
+        let at = |tau: f64| -> Vec<f64> { start.iter().zip(&step.target_scales).map(|(a, b)| a + tau * (b - a)).collect() };
+        let mut tau = 0.0f64;
+        let mut dtau = 1.0 / step.increments.max(1) as f64;
+        let min_dtau = dtau * 0.25f64.powi(self.settings.max_cutbacks as i32);
+        let mut inc = 0;
+        let mut iterations = 0;
+        let mut cutbacks = 0;
+        let mut indefinite = false;
+        // The previous converged state and its load level, for the extrapolating predictor.
+        let mut previous: Option<(State, f64)> = None;
+        loop {
+            let next = if tau + dtau >= 1.0 - 1e-9 { 1.0 } else { tau + dtau };
+            let trial_scales = at(next);
+            let saved = state.clone();
+            let tau_start = tau;
+            if let Some((old, tau_old)) = &previous {
+                extrapolate(state, old, (next - tau) / (tau - tau_old));
+            }
+            let mut report_progress = |it: usize, res: f64| progress(&Progress { step: si, fraction: next, iteration: it, residual: res });
+            self.begin_nodal_increment((next - tau) * step.increments.max(1) as f64);
+            match self.attempt(state, &trial_scales, false, true, &mut report_progress) {
+                Attempt::Converged { iterations: its, residuals, indefinite: ind, energy } => {
+                    iterations += its;
+                    indefinite |= ind;
+                    tau = next;
+                    inc += 1;
+                    self.commit_nodal_forces(state);
+                    let (negative_pivots, stiffness_parameter, stability_event) = self.stability_at(state, start, &step.target_scales, tracker);
+                    let report = IncrementReport {
+                        step: si,
+                        step_name: step.name.clone(),
+                        increment: inc,
+                        time: si as f64 + tau,
+                        scales: trial_scales.clone(),
+                        iterations,
+                        residuals,
+                        cutbacks,
+                        indefinite_tangent: indefinite,
+                        energy,
+                        extra: std::mem::take(&mut self.extra_reports),
+                        negative_pivots,
+                        stiffness_parameter,
+                        stability_event,
+                        ..Default::default()
+                    };
+                    on_increment(&report, state, self);
+                    if tau >= 1.0 {
+                        return Ok(trial_scales);
+                    }
+                    previous = Some((saved, tau_start));
+                    iterations = 0;
+                    cutbacks = 0;
+                    indefinite = false;
+                    dtau *= match its {
+                        0..=8 => 2.0,
+                        9..=12 => 1.5,
+                        13..=18 => 1.0,
+                        _ => 0.5,
+                    };
+                }
+                Attempt::Failed { iteration, residuals, worst_element, cause } => {
+                    *state = saved;
+                    iterations += iteration;
+                    cutbacks += 1;
+                    dtau *= 0.25;
+                    if dtau < min_dtau * (1.0 - 1e-9) {
+                        let cause = super::diagnose::explain(self.model, state, &cause, indefinite || self.cholesky.kind() == FactorKind::Ldlt);
+                        return Err(SolveError {
+                            step: si,
+                            step_name: step.name.clone(),
+                            last_converged_time: si as f64 + tau,
+                            simulated_time: None,
+                            iteration,
+                            residuals,
+                            worst_element,
+                            cause: format!("{cause}; automatic increment cut to {:.3e} of the step (max_cutbacks = {} quarterings of the first)", dtau * 4.0, self.settings.max_cutbacks),
+                        });
+                    }
+                }
+            }
+        }
+    }
+}
