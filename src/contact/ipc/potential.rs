@@ -24,8 +24,8 @@ use std::hash::{BuildHasherDefault, Hasher};
 
 use nalgebra::{Matrix3, Vector3};
 
-use super::autodiff::Hd;
-use super::primitives::{squared_distance_in, Feature};
+use super::autodiff::{cross, dot, point, Hd, Hv};
+use super::primitives::{mollifier, squared_distance_in, Feature};
 use crate::element::NODE_DOFS;
 
 /// Multiply-rotate hash for small integer keys (the Fx hash of the Rust compiler): node
@@ -164,6 +164,67 @@ pub(super) fn derivative(key: &FeatureKey, s: &Scalar, x: &(dyn Fn(usize) -> Vec
     }
 }
 
+/// `d` in the 12 coordinates of the four nodes `nodes` (the feature's nodes are among them).
+fn in_pair_nodes(d: &Derivative, nodes: &[usize; 4]) -> Hd<12> {
+    fn spread<const N: usize>(e: &Hd<N>, own: &[usize], nodes: &[usize; 4]) -> Hd<12> {
+        let slot: Vec<usize> = own.iter().map(|a| nodes.iter().position(|b| b == a).unwrap_or(0)).collect();
+        let at = |c: usize| 3 * slot[c / 3] + c % 3;
+        let mut out = Hd::<12>::c(e.v);
+        for i in 0..N {
+            out.g[at(i)] += e.g[i];
+            for j in 0..N {
+                out.h[at(i)][at(j)] += e.h[i][j];
+            }
+        }
+        out
+    }
+    match d {
+        Derivative::Two(n, e) => spread(e, n, nodes),
+        Derivative::Three(n, e) => spread(e, n, nodes),
+        Derivative::Four(n, e) => spread(e, n, nodes),
+    }
+}
+
+/// Gradient and Hessian, in the four nodes (a₀, a₁, b₀, b₁) of a nearly parallel edge–edge
+/// pair, of E = F(dist_f) m(|u × v|²) (IPC supplement eq. 17: the mollifier m of threshold
+/// `eps`, u = a₁ − a₀, v = b₁ − b₀), `s` holding F, F′, F″ in the distance of the pair's
+/// closest feature `key`. The distance is differentiated in the feature's own nodes and
+/// |u × v|² in the six coordinates of u and v, then both are spread to the twelve (∂/∂a₀ =
+/// −∂/∂u, ∂/∂a₁ = ∂/∂u, likewise for v) and multiplied: the same derivatives as the product
+/// formed in all twelve coordinates throughout, at a fraction of the work.
+pub(super) fn mollified_derivative(nodes: &[usize; 4], key: &FeatureKey, s: &Scalar, eps: f64, x: &(dyn Fn(usize) -> Vector3<f64> + Sync)) -> Hd<12> {
+    let f = in_pair_nodes(&derivative(key, s, x), nodes);
+    let xs = nodes.map(x);
+    let (u, v) = (xs[1] - xs[0], xs[3] - xs[2]);
+    let uv = [Vector3::zeros(), u, Vector3::zeros(), v];
+    // |u × v|² in the variables u (0..3) and v (3..6): slots 1 and 3 of `uv`.
+    let cs = {
+        let p: [Hv<6>; 4] = std::array::from_fn(|k| match k {
+            1 => point(&uv[1], 0),
+            3 => point(&uv[3], 1),
+            _ => [Hd::c(0.0), Hd::c(0.0), Hd::c(0.0)],
+        });
+        let c = cross(&p[1], &p[3]);
+        dot(&c, &c)
+    };
+    let (mv, m1, m2) = mollifier(cs.v, eps);
+    let m6 = cs.chain(mv, m1, m2);
+    let var = |i: usize| -> (usize, f64) {
+        let (slot, c) = (i / 3, i % 3);
+        (3 * (slot / 2) + c, if slot % 2 == 0 { -1.0 } else { 1.0 })
+    };
+    let mut m = Hd::<12>::c(m6.v);
+    for i in 0..12 {
+        let (vi, si) = var(i);
+        m.g[i] = si * m6.g[vi];
+        for j in 0..12 {
+            let (vj, sj) = var(j);
+            m.h[i][j] = si * sj * m6.h[vi][vj];
+        }
+    }
+    f * m
+}
+
 /// The tangent blocks of the contact terms: −∇²E per node (`diag`) and per node pair a < b
 /// (`off`, the block of row a, column b).
 #[derive(Default)]
@@ -225,5 +286,51 @@ impl Blocks {
         let Some(k) = k else { return };
         let sub: Vec<usize> = used.iter().map(|&s| nodes[s]).collect();
         self.add(&sub, |i, j| k * (weights[used[i]] * weights[used[j]]));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::primitives::{cross_squared, edge_edge_feature, squared_distance};
+    use super::*;
+
+    /// The energy of pairs summed per feature and the mollified edge–edge product formed in
+    /// the features' own coordinates have the derivatives of the same energies formed in all
+    /// twelve coordinates of each pair (the formulation before the split).
+    #[test]
+    fn per_feature_derivatives_match_the_twelve_coordinate_forms() {
+        let v = Vector3::new;
+        let ids = [7usize, 3, 12, 5];
+        // Nearly parallel edges (mollified) whose closest features are an endpoint and an
+        // edge, and crossing edges (line–line).
+        for xs in [
+            [v(0.0, 0.0, 0.0), v(1.0, 0.02, 0.0), v(0.3, 0.0, 0.05), v(1.4, 0.0, 0.051)],
+            [v(0.0, 0.0, 0.0), v(1.0, 0.0, 0.0), v(0.5, -0.5, 0.3), v(0.45, 0.5, 0.31)],
+        ] {
+            let x = |a: usize| xs[ids.iter().position(|&b| b == a).unwrap_or(0)];
+            let (feat, _) = edge_edge_feature(&xs);
+            let key = FeatureKey::of(feat, &ids);
+            let q = squared_distance(feat, &xs);
+            let dist = q.v.sqrt();
+            let s = Scalar { e: 0.3 * dist * dist, e1: 0.6 * dist + 0.1, e2: 0.6 - 0.2 * dist };
+            let (dd, ddd) = (0.5 / dist, -0.25 / (dist * dist * dist));
+            let full = q.chain(s.e, s.e1 * dd, s.e2 * dd * dd + s.e1 * ddd);
+            let split = in_pair_nodes(&derivative(&key, &s, &x), &ids);
+            let eps = 1e-3 * (xs[1] - xs[0]).norm_squared() * (xs[3] - xs[2]).norm_squared() * 50.0;
+            let cs = cross_squared(&xs);
+            let (mv, m1, m2) = mollifier(cs.v, eps);
+            let full_m = full * cs.chain(mv, m1, m2);
+            let split_m = mollified_derivative(&ids, &key, &s, eps, &x);
+            for (a, b) in [(&full, &split), (&full_m, &split_m)] {
+                let scale = a.h.iter().flatten().fold(a.g.iter().fold(0.0f64, |m, g| m.max(g.abs())), |m, h| m.max(h.abs()));
+                assert!((a.v - b.v).abs() <= 1e-12 * a.v.abs().max(1e-300), "{feat:?}: value {} vs {}", a.v, b.v);
+                for i in 0..12 {
+                    assert!((a.g[i] - b.g[i]).abs() <= 1e-10 * scale, "{feat:?}: gradient {i}: {} vs {}", a.g[i], b.g[i]);
+                    for j in 0..12 {
+                        assert!((a.h[i][j] - b.h[i][j]).abs() <= 1e-10 * scale, "{feat:?}: Hessian {i},{j}: {} vs {}", a.h[i][j], b.h[i][j]);
+                    }
+                }
+            }
+        }
     }
 }

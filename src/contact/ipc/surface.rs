@@ -53,10 +53,10 @@ use rayon::prelude::*;
 use super::autodiff::Hd;
 use super::broad_phase::{candidates, Pads};
 use super::friction::{Friction, FrictionTerm};
-use super::potential::{derivative, group, Blocks, Derivative, FeatureKey, FxMap, Scalar};
+use super::potential::{derivative, group, mollified_derivative, Blocks, Derivative, FeatureKey, FxMap, Scalar};
 pub use super::report::{SurfaceIncrement, SurfaceTimings};
 pub use super::settings::{SurfaceSettings, SurfaceSetup};
-use super::primitives::{cross_squared, edge_edge_feature, mollifier, point_triangle_feature, squared_distance, squared_distance_value, Feature};
+use super::primitives::{edge_edge_feature, mollifier, point_triangle_feature, squared_distance_value, Feature};
 use crate::contact::barrier::barrier;
 use crate::contact::ccd::conservative_advancement;
 use crate::element::NODE_DOFS;
@@ -475,11 +475,8 @@ impl SurfaceContact {
                     if cs2 < c.eps {
                         m = mollifier(cs2, c.eps).0;
                         if derivatives {
-                            let q = squared_distance(feat, &xs);
-                            let (dd, ddd) = (0.5 / dist, -0.25 / (dist * dist * dist));
-                            let cs = cross_squared(&xs);
-                            let (mv, m1, m2) = mollifier(cs.v, c.eps);
-                            term.mollified = Some(Box::new(q.chain(kap * b, kap * b1 * dd, kap * (b2 * dd * dd + b1 * ddd)) * cs.chain(mv, m1, m2)));
+                            let f = Scalar { e: kap * b, e1: kap * b1, e2: kap * b2 };
+                            term.mollified = Some(Box::new(mollified_derivative(&nodes, &feature, &f, c.eps, &x)));
                         }
                     }
                 }
