@@ -170,6 +170,7 @@ fn in_pair_nodes(d: &Derivative, nodes: &[usize; 4]) -> Hd<12> {
         let slot: Vec<usize> = own.iter().map(|a| nodes.iter().position(|b| b == a).unwrap_or(0)).collect();
         let at = |c: usize| 3 * slot[c / 3] + c % 3;
         let mut out = Hd::<12>::c(e.v);
+        out.lin = e.lin;
         for i in 0..N {
             out.g[at(i)] += e.g[i];
             for j in 0..N {
@@ -214,6 +215,7 @@ pub(super) fn mollified_derivative(nodes: &[usize; 4], key: &FeatureKey, s: &Sca
         (3 * (slot / 2) + c, if slot % 2 == 0 { -1.0 } else { 1.0 })
     };
     let mut m = Hd::<12>::c(m6.v);
+    m.lin = m6.lin;
     for i in 0..12 {
         let (vi, si) = var(i);
         m.g[i] = si * m6.g[vi];

@@ -156,6 +156,7 @@ fn expanded<const N: usize>(f: Feature, x: &[Vector3<f64>; 4], slots: &[usize]) 
     let r = squared_distance_in::<N>(f, x, slots);
     let at = |c: usize| 3 * slots[c / 3] + c % 3;
     let mut out = Hd::<12>::c(r.v);
+    out.lin = r.lin;
     for ci in 0..N {
         out.g[at(ci)] = r.g[ci];
         for cj in 0..N {

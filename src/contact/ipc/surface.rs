@@ -492,7 +492,9 @@ impl SurfaceContact {
     /// without mollifier, per pair for those with it.
     fn barrier_derivatives(&self, terms: &[Term], x: &(dyn Fn(usize) -> Vector3<f64> + Sync)) -> Vec<Derivative> {
         let grouped = group(terms.iter().filter(|t| t.mollified.is_none() && t.energy.is_finite()).map(|t| (t.feature, t.scalar)));
-        let mut out: Vec<Derivative> = grouped.par_iter().map(|(k, s)| derivative(k, s, x)).collect();
+        let n_mollified = terms.iter().filter(|t| t.mollified.is_some()).count();
+        let mut out: Vec<Derivative> = Vec::with_capacity(grouped.len() + n_mollified);
+        out.par_extend(grouped.par_iter().map(|(k, s)| derivative(k, s, x)));
         out.extend(terms.iter().filter_map(|t| t.mollified.as_ref().map(|e| Derivative::Four(t.nodes, **e))));
         out
     }
