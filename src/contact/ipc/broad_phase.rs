@@ -4,6 +4,8 @@
 //! triangles (edges) is queried with each point's (edge's) box, so the search costs
 //! O(n log n), not O(n²).
 
+use std::sync::Arc;
+
 use nalgebra::Vector3;
 use parry3d_f64::bounding_volume::Aabb;
 use parry3d_f64::math::Vector as PVec;
@@ -67,4 +69,33 @@ pub fn candidates(
         })
         .collect();
     (pt, ee)
+}
+
+/// The candidates of a collision-detection sweep, kept for the evaluations along it. Found
+/// with pads widened by a slack σ, they hold every pair closer than the sum of its pads at
+/// any configuration whose every node lies within σ of its box over the sweep (spanned by the
+/// node's positions at the segment's two ends): such an evaluation needs no broad phase of
+/// its own.
+pub struct Sweep<P> {
+    lo: Vec<Vector3<f64>>,
+    hi: Vec<Vector3<f64>>,
+    pairs: Arc<Vec<P>>,
+}
+
+impl<P> Sweep<P> {
+    /// The sweep's candidates `pairs`, with each point's box `lo`..`hi` over the sweep.
+    pub fn new(lo: Vec<Vector3<f64>>, hi: Vec<Vector3<f64>>, pairs: Arc<Vec<P>>) -> Self {
+        Self { lo, hi, pairs }
+    }
+
+    /// The candidates when every point `points[i]` lies at `x` within `slack` of its box
+    /// (then they include every pair near `x`), else None.
+    pub fn pairs_at(&self, points: &[usize], x: &(dyn Fn(usize) -> Vector3<f64> + Sync), slack: f64) -> Option<Arc<Vec<P>>> {
+        let s = Vector3::repeat(slack);
+        let inside = points.iter().enumerate().all(|(i, &a)| {
+            let p = x(a);
+            (self.lo[i] - s).iter().zip(p.iter()).all(|(l, v)| l <= v) && (self.hi[i] + s).iter().zip(p.iter()).all(|(h, v)| v <= h)
+        });
+        inside.then(|| self.pairs.clone())
+    }
 }

@@ -51,7 +51,7 @@ use nalgebra::{Matrix3, Vector3};
 use rayon::prelude::*;
 
 use super::autodiff::Hd;
-use super::broad_phase::{candidates, Pads};
+use super::broad_phase::{candidates, Pads, Sweep};
 use super::friction::{Friction, FrictionTerm};
 use super::potential::{derivative, group, mollified_derivative, Blocks, Derivative, FeatureKey, FxMap, Scalar};
 pub use super::report::{SurfaceIncrement, SurfaceTimings};
@@ -81,16 +81,6 @@ const SWEEP_SLACK: f64 = 1e-6;
 
 /// A candidate pair: kind, key, nodes and reference constants.
 type Pair = (Kind, (usize, usize), [usize; 4], Constants);
-
-/// The candidates of the last collision-detection sweep, kept for the evaluations along it.
-/// Pads are widened by a slack σ: a configuration whose every contact node lies within σ of
-/// its box over the sweep (the segment's endpoints) has every pair closer than its contact
-/// distance among these candidates, so its evaluation needs no broad phase of its own.
-struct Sweep {
-    lo: Vec<Vector3<f64>>,
-    hi: Vec<Vector3<f64>>,
-    pairs: Arc<Vec<Pair>>,
-}
 
 /// Kind of a pair.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -159,7 +149,8 @@ pub struct SurfaceContact {
     /// The pads widened by the sweep slack σ, and σ.
     sweep_pads: (Vec<f64>, Vec<f64>, Vec<f64>),
     slack: f64,
-    sweep: Mutex<Option<Sweep>>,
+    /// The candidates of the last collision-detection sweep.
+    sweep: Mutex<Option<Sweep<Pair>>>,
     friction: FxMap<(Kind, usize, usize), Friction>,
     /// Reference constants per candidate pair (None: excluded), filled as pairs come near.
     constants: RwLock<FxMap<(Kind, usize, usize), Option<Constants>>>,
@@ -380,13 +371,7 @@ impl SurfaceContact {
     /// (see [`Sweep`]), else None.
     fn swept_pairs(&self, x: &(dyn Fn(usize) -> Vector3<f64> + Sync)) -> Option<Arc<Vec<Pair>>> {
         let sw = self.sweep.lock().ok()?;
-        let sw = sw.as_ref()?;
-        let s = Vector3::repeat(self.slack);
-        let inside = self.points.iter().enumerate().all(|(i, &a)| {
-            let p = x(a);
-            (sw.lo[i] - s).iter().zip(p.iter()).all(|(l, v)| l <= v) && (sw.hi[i] + s).iter().zip(p.iter()).all(|(h, v)| v <= h)
-        });
-        inside.then(|| sw.pairs.clone())
+        sw.as_ref()?.pairs_at(&self.points, x, self.slack)
     }
 
     /// Candidate pairs near configuration(s) `configs`, with their nodes and constants (from
@@ -602,7 +587,7 @@ impl NodalForces for SurfaceContact {
         let lo = self.points.iter().map(|&a| x0(a).inf(&x1(a))).collect();
         let hi = self.points.iter().map(|&a| x0(a).sup(&x1(a))).collect();
         if let Ok(mut sw) = self.sweep.lock() {
-            *sw = Some(Sweep { lo, hi, pairs });
+            *sw = Some(Sweep::new(lo, hi, pairs));
         }
         if let Ok(mut tm) = self.timings.lock() {
             tm.ccd += t.elapsed().as_secs_f64();
