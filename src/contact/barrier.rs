@@ -34,6 +34,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use super::body::RigidBody;
+use super::ccd::conservative_advancement;
 use super::mechanics::distance_hessian;
 use crate::element::NODE_DOFS;
 use crate::model::{Model, State};
@@ -359,7 +360,8 @@ impl NodalForces for BarrierContact {
     /// each node moves on the segment from its position in `from` to that in `to`; the signed
     /// distance is 1-Lipschitz, so from a gap g the node may advance by (g − g_min)/|Δx| of
     /// the segment, g_min = (1 − CCD_CLOSE) g₀, repeatedly until the end of the segment or
-    /// until it no longer advances (then that fraction is the bound).
+    /// until it no longer advances (then that fraction is the bound;
+    /// [`conservative_advancement`], shared with surface contact).
     fn max_step(&self, model: &Model, from: &State, to: &State) -> f64 {
         let s = (0..self.nodes.len())
             .into_par_iter()
@@ -379,30 +381,8 @@ impl NodalForces for BarrierContact {
                     if g0 <= 0.0 {
                         return 0.0;
                     }
-                    let gmin = (1.0 - CCD_CLOSE) * g0;
-                    let mut s = 0.0;
-                    let mut g = g0;
-                    for _ in 0..50 {
-                        let ds = (g - gmin) / len;
-                        if s + ds >= 1.0 {
-                            s = 1.0;
-                            break;
-                        }
-                        s += ds;
-                        if ds < 1e-3 * (1.0 - s).max(1e-12) && ds < 1e-6 {
-                            break;
-                        }
-                        match body.proximity(&(x0 + dx * s), r + len) {
-                            Some(q) => g = q.distance - r,
-                            None => {
-                                s = 1.0;
-                                break;
-                            }
-                        }
-                        if g <= gmin * 1.000_001 {
-                            break;
-                        }
-                    }
+                    // The distance to a body is 1-Lipschitz: it changes by at most |Δx| = len.
+                    let s = conservative_advancement(g0, len, CCD_CLOSE, 50, |s| body.proximity(&(x0 + dx * s), r + len).map(|q| q.distance - r));
                     smin = smin.min(s);
                 }
                 smin

@@ -3,6 +3,7 @@
 
 pub mod barrier;
 pub mod body;
+pub mod ccd;
 pub mod drape;
 pub mod interply;
 pub mod intersection;

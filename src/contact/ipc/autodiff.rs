@@ -7,11 +7,15 @@
 use std::ops::{Add, Mul, Neg, Sub};
 
 /// A scalar `v` with gradient `g` and (symmetric) Hessian `h` with respect to `N` variables.
+/// `lin` records that `h` is identically zero (constants, variables and their sums), so the
+/// operations skip the Hessian terms that vanish — the same results, less work: the
+/// distances of contact begin with differences of points.
 #[derive(Clone, Copy, Debug)]
 pub struct Hd<const N: usize> {
     pub v: f64,
     pub g: [f64; N],
     pub h: [[f64; N]; N],
+    pub lin: bool,
 }
 
 /// A 3-vector of [`Hd`] scalars.
@@ -20,7 +24,7 @@ pub type Hv<const N: usize> = [Hd<N>; 3];
 impl<const N: usize> Hd<N> {
     /// A constant.
     pub fn c(v: f64) -> Self {
-        Self { v, g: [0.0; N], h: [[0.0; N]; N] }
+        Self { v, g: [0.0; N], h: [[0.0; N]; N], lin: true }
     }
 
     /// Variable number `i` with value `v`.
@@ -31,15 +35,18 @@ impl<const N: usize> Hd<N> {
     }
 
     /// f(self) from f, f′ and f″ at `self.v` (chain rule to second order).
-    pub fn chain(self, f: f64, f1: f64, f2: f64) -> Self {
-        let mut out = Self::c(f);
+    pub fn chain(mut self, f: f64, f1: f64, f2: f64) -> Self {
         for i in 0..N {
-            out.g[i] = f1 * self.g[i];
             for j in 0..N {
-                out.h[i][j] = f1 * self.h[i][j] + f2 * self.g[i] * self.g[j];
+                self.h[i][j] = if self.lin { f2 * self.g[i] * self.g[j] } else { f1 * self.h[i][j] + f2 * self.g[i] * self.g[j] };
             }
         }
-        out
+        for i in 0..N {
+            self.g[i] *= f1;
+        }
+        self.v = f;
+        self.lin = false;
+        self
     }
 
     /// 1 / self.
@@ -57,7 +64,9 @@ impl<const N: usize> Hd<N> {
     pub fn scale(mut self, c: f64) -> Self {
         self.v *= c;
         self.g.iter_mut().for_each(|x| *x *= c);
-        self.h.iter_mut().flatten().for_each(|x| *x *= c);
+        if !self.lin {
+            self.h.iter_mut().flatten().for_each(|x| *x *= c);
+        }
         self
     }
 }
@@ -68,10 +77,15 @@ impl<const N: usize> Add for Hd<N> {
         self.v += o.v;
         for i in 0..N {
             self.g[i] += o.g[i];
-            for j in 0..N {
-                self.h[i][j] += o.h[i][j];
+        }
+        if !o.lin {
+            for i in 0..N {
+                for j in 0..N {
+                    self.h[i][j] += o.h[i][j];
+                }
             }
         }
+        self.lin &= o.lin;
         self
     }
 }
@@ -82,10 +96,15 @@ impl<const N: usize> Sub for Hd<N> {
         self.v -= o.v;
         for i in 0..N {
             self.g[i] -= o.g[i];
-            for j in 0..N {
-                self.h[i][j] -= o.h[i][j];
+        }
+        if !o.lin {
+            for i in 0..N {
+                for j in 0..N {
+                    self.h[i][j] -= o.h[i][j];
+                }
             }
         }
+        self.lin &= o.lin;
         self
     }
 }
@@ -100,15 +119,26 @@ impl<const N: usize> Neg for Hd<N> {
 impl<const N: usize> Mul for Hd<N> {
     type Output = Self;
     /// Product rule: (ab)″ = a″b + ab″ + a′b′ᵀ + b′a′ᵀ.
-    fn mul(self, o: Self) -> Self {
-        let mut out = Self::c(self.v * o.v);
+    fn mul(mut self, o: Self) -> Self {
+        let (a, b) = (self.v, o.v);
         for i in 0..N {
-            out.g[i] = self.g[i] * o.v + self.v * o.g[i];
             for j in 0..N {
-                out.h[i][j] = self.h[i][j] * o.v + self.v * o.h[i][j] + self.g[i] * o.g[j] + o.g[i] * self.g[j];
+                // Left to right as in the full form, so the results are the same to the bit.
+                let (c, d) = (self.g[i] * o.g[j], o.g[i] * self.g[j]);
+                self.h[i][j] = match (self.lin, o.lin) {
+                    (true, true) => c + d,
+                    (true, false) => a * o.h[i][j] + c + d,
+                    (false, true) => self.h[i][j] * b + c + d,
+                    (false, false) => self.h[i][j] * b + a * o.h[i][j] + c + d,
+                };
             }
         }
-        out
+        for i in 0..N {
+            self.g[i] = self.g[i] * b + a * o.g[i];
+        }
+        self.v = a * b;
+        self.lin = false;
+        self
     }
 }
 

@@ -1,8 +1,10 @@
 //! Broad phase of surface contact: candidate point–triangle and edge–edge pairs whose
-//! bounding boxes, inflated by a reach, overlap — at one configuration or over the straight
+//! bounding boxes, each inflated by its primitive's pad, overlap — at one configuration or over the straight
 //! sweep between two (for collision detection). A parry3d bounding-volume hierarchy of the
 //! triangles (edges) is queried with each point's (edge's) box, so the search costs
 //! O(n log n), not O(n²).
+
+use std::sync::Arc;
 
 use nalgebra::Vector3;
 use parry3d_f64::bounding_volume::Aabb;
@@ -20,23 +22,36 @@ fn aabb(points: impl Iterator<Item = Vector3<f64>>, inflate: f64) -> Aabb {
     Aabb::new(PVec::new(lo.x - inflate, lo.y - inflate, lo.z - inflate), PVec::new(hi.x + inflate, hi.y + inflate, hi.z + inflate))
 }
 
+/// How far each primitive's box is inflated: per point, per triangle and per edge (for
+/// surface contact, each primitive's largest half thickness, so that two boxes overlap
+/// whenever the primitives are closer than the sum, their contact distance).
+pub struct Pads<'a> {
+    /// Per point.
+    pub point: &'a [f64],
+    /// Per triangle.
+    pub tri: &'a [f64],
+    /// Per edge.
+    pub edge: &'a [f64],
+}
+
 /// Candidate pairs (point index, triangle index) and (edge index a, edge index b), a < b,
-/// whose boxes come within `reach` of each other. Each primitive's box spans its nodes'
-/// positions in every configuration of `configs` (one: a configuration; two: a sweep).
-/// `point_ok(p, t)` and `edge_ok(a, b)` filter out excluded pairs.
+/// whose boxes, inflated by their `pads`, overlap: every pair of primitives closer than the
+/// sum of their pads is among them. Each primitive's box spans its nodes' positions in every
+/// configuration of `configs` (one: a configuration; two: a straight sweep between them,
+/// which stays inside the box). `point_ok(p, t)` and `edge_ok(a, b)` filter out excluded
+/// pairs.
 pub fn candidates(
     points: &[usize],
     tris: &[[usize; 3]],
     edges: &[[usize; 2]],
     configs: &[&dyn Fn(usize) -> Vector3<f64>],
-    reach: f64,
+    pads: &Pads,
     point_ok: &(dyn Fn(usize, usize) -> bool + Sync),
     edge_ok: &(dyn Fn(usize, usize) -> bool + Sync),
 ) -> (Vec<(usize, usize)>, Vec<(usize, usize)>) {
-    let tri_boxes: Vec<Aabb> = tris.iter().map(|t| aabb(configs.iter().flat_map(|x| t.iter().map(move |&n| x(n))), 0.0)).collect();
-    let edge_boxes: Vec<Aabb> = edges.iter().map(|e| aabb(configs.iter().flat_map(|x| e.iter().map(move |&n| x(n))), 0.0)).collect();
-    let point_boxes: Vec<Aabb> = points.iter().map(|&n| aabb(configs.iter().map(|x| x(n)), reach)).collect();
-    let inflated_edges: Vec<Aabb> = edge_boxes.iter().map(|b| aabb([b.mins, b.maxs].iter().map(|p| Vector3::new(p.x, p.y, p.z)), reach)).collect();
+    let tri_boxes: Vec<Aabb> = tris.iter().zip(pads.tri).map(|(t, &r)| aabb(configs.iter().flat_map(|x| t.iter().map(move |&n| x(n))), r)).collect();
+    let edge_boxes: Vec<Aabb> = edges.iter().zip(pads.edge).map(|(e, &r)| aabb(configs.iter().flat_map(|x| e.iter().map(move |&n| x(n))), r)).collect();
+    let point_boxes: Vec<Aabb> = points.iter().zip(pads.point).map(|(&n, &r)| aabb(configs.iter().map(|x| x(n)), r)).collect();
     let tri_bvh = Bvh::from_leaves(BvhBuildStrategy::default(), &tri_boxes);
     let edge_bvh = Bvh::from_leaves(BvhBuildStrategy::default(), &edge_boxes);
     let pt: Vec<(usize, usize)> = (0..points.len())
@@ -49,9 +64,38 @@ pub fn candidates(
     let ee: Vec<(usize, usize)> = (0..edges.len())
         .into_par_iter()
         .flat_map_iter(|a| {
-            let hits: Vec<(usize, usize)> = edge_bvh.intersect_aabb(&inflated_edges[a]).map(|b| b as usize).filter(|&b| a < b && edge_ok(a, b)).map(|b| (a, b)).collect();
+            let hits: Vec<(usize, usize)> = edge_bvh.intersect_aabb(&edge_boxes[a]).map(|b| b as usize).filter(|&b| a < b && edge_ok(a, b)).map(|b| (a, b)).collect();
             hits.into_iter()
         })
         .collect();
     (pt, ee)
+}
+
+/// The candidates of a collision-detection sweep, kept for the evaluations along it. Found
+/// with pads widened by a slack σ, they hold every pair closer than the sum of its pads at
+/// any configuration whose every node lies within σ of its box over the sweep (spanned by the
+/// node's positions at the segment's two ends): such an evaluation needs no broad phase of
+/// its own.
+pub struct Sweep<P> {
+    lo: Vec<Vector3<f64>>,
+    hi: Vec<Vector3<f64>>,
+    pairs: Arc<Vec<P>>,
+}
+
+impl<P> Sweep<P> {
+    /// The sweep's candidates `pairs`, with each point's box `lo`..`hi` over the sweep.
+    pub fn new(lo: Vec<Vector3<f64>>, hi: Vec<Vector3<f64>>, pairs: Arc<Vec<P>>) -> Self {
+        Self { lo, hi, pairs }
+    }
+
+    /// The candidates when every point `points[i]` lies at `x` within `slack` of its box
+    /// (then they include every pair near `x`), else None.
+    pub fn pairs_at(&self, points: &[usize], x: &(dyn Fn(usize) -> Vector3<f64> + Sync), slack: f64) -> Option<Arc<Vec<P>>> {
+        let s = Vector3::repeat(slack);
+        let inside = points.iter().enumerate().all(|(i, &a)| {
+            let p = x(a);
+            (self.lo[i] - s).iter().zip(p.iter()).all(|(l, v)| l <= v) && (self.hi[i] + s).iter().zip(p.iter()).all(|(h, v)| v <= h)
+        });
+        inside.then(|| self.pairs.clone())
+    }
 }

@@ -4,7 +4,8 @@
 
 use std::collections::HashMap;
 
-use nalgebra::{Matrix3, SMatrix, Vector3};
+use nalgebra::{Matrix3, Vector3};
+use rayon::prelude::*;
 
 use super::surface::Kind;
 
@@ -21,13 +22,18 @@ pub(super) struct Friction {
     pub(super) slip: f64,
 }
 
-/// Friction of one committed pair at a configuration.
+/// Friction of one committed pair at a configuration: a potential of the pair's weighted
+/// point r = Σ_k w_k x_k, whose gradient in x_k is w_k g and Hessian block in (x_i, x_j) is
+/// w_i w_j K.
 pub(super) struct FrictionTerm {
     pub(super) key: (Kind, usize, usize),
     pub(super) nodes: [usize; 4],
+    pub(super) weights: [f64; 4],
     pub(super) energy: f64,
-    pub(super) grad: [f64; 12],
-    pub(super) hess: Option<SMatrix<f64, 12, 12>>,
+    /// ∂D/∂r.
+    pub(super) g: Vector3<f64>,
+    /// ∂²D/∂r², positive semi-definite (when asked for).
+    pub(super) k: Option<Matrix3<f64>>,
     /// Friction force on slot 0 (the point or the first edge).
     pub(super) force: Vector3<f64>,
 }
@@ -35,13 +41,13 @@ pub(super) struct FrictionTerm {
 /// Friction potentials D = μλ̄ δ ln cosh(|s|/δ) of the committed pairs `map` at `x`, s the
 /// slip of the pair's weighted points from their anchor in the lagged tangent plane, with
 /// gradient and (when `hessian`) the exact Hessian, positive semi-definite.
-pub(super) fn terms(map: &HashMap<(Kind, usize, usize), Friction>, mu: f64, x: &(dyn Fn(usize) -> Vector3<f64> + Sync), hessian: bool) -> Vec<FrictionTerm> {
+pub(super) fn terms<S: std::hash::BuildHasher + Sync>(map: &HashMap<(Kind, usize, usize), Friction, S>, mu: f64, x: &(dyn Fn(usize) -> Vector3<f64> + Sync), hessian: bool) -> Vec<FrictionTerm> {
     if mu == 0.0 {
         return Vec::new();
     }
-    map
-        .iter()
-        .filter(|(_, h)| h.force > 0.0)
+    let committed: Vec<(&(Kind, usize, usize), &Friction)> = map.iter().filter(|(_, h)| h.force > 0.0).collect();
+    committed
+        .into_par_iter()
         .map(|(&key, h)| {
             let r: Vector3<f64> = (0..4).map(|k| x(h.nodes[k]) * h.weights[k]).sum();
             let p = Matrix3::identity() - h.normal * h.normal.transpose();
@@ -59,15 +65,7 @@ pub(super) fn terms(map: &HashMap<(Kind, usize, usize), Friction>, mu: f64, x: &
             } else {
                 (Vector3::zeros(), p * (cap / h.delta))
             };
-            let mut grad = [0.0; 12];
-            for k in 0..4 {
-                for a in 0..3 {
-                    grad[3 * k + a] = h.weights[k] * g3[a];
-                }
-            }
-            let hess = hessian.then(|| SMatrix::<f64, 12, 12>::from_fn(|i, j| h.weights[i / 3] * h.weights[j / 3] * k3[(i % 3, j % 3)]));
-            FrictionTerm { key, nodes: h.nodes, energy, grad, hess, force: -g3 }
+            FrictionTerm { key, nodes: h.nodes, weights: h.weights, energy, g: g3, k: hessian.then_some(k3), force: -g3 }
         })
         .collect()
 }
-

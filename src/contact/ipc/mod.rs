@@ -4,7 +4,10 @@
 pub mod autodiff;
 pub mod broad_phase;
 mod friction;
+mod potential;
 pub mod primitives;
+mod report;
+mod settings;
 pub mod surface;
 
-pub use surface::{attach, SurfaceContact, SurfaceIncrement, SurfaceSettings, SurfaceSetup};
+pub use surface::{attach, SurfaceContact, SurfaceIncrement, SurfaceSettings, SurfaceSetup, SurfaceTimings};

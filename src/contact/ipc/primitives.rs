@@ -153,13 +153,10 @@ pub fn squared_distance(f: Feature, x: &[Vector3<f64>; 4]) -> Hd<12> {
 /// [`squared_distance_of`] with variables only for `slots` (N = 3 × their number), its
 /// gradient and Hessian expanded to the 12 coordinates of the four slots.
 fn expanded<const N: usize>(f: Feature, x: &[Vector3<f64>; 4], slots: &[usize]) -> Hd<12> {
-    let p: [Hv<N>; 4] = std::array::from_fn(|k| match slots.iter().position(|&s| s == k) {
-        Some(c) => point(&x[k], c),
-        None => [Hd::c(x[k].x), Hd::c(x[k].y), Hd::c(x[k].z)],
-    });
-    let r = squared_distance_of(f, &p);
+    let r = squared_distance_in::<N>(f, x, slots);
     let at = |c: usize| 3 * slots[c / 3] + c % 3;
     let mut out = Hd::<12>::c(r.v);
+    out.lin = r.lin;
     for ci in 0..N {
         out.g[at(ci)] = r.g[ci];
         for cj in 0..N {
@@ -167,6 +164,17 @@ fn expanded<const N: usize>(f: Feature, x: &[Vector3<f64>; 4], slots: &[usize]) 
         }
     }
     out
+}
+
+/// Squared distance of the features `f` of the four points `x`, differentiated only in the
+/// coordinates of `slots` (N = 3 × their number; slot `slots[c]` takes variables 3c..3c+3),
+/// the other points held fixed: the derivatives of a feature in its own nodes only.
+pub fn squared_distance_in<const N: usize>(f: Feature, x: &[Vector3<f64>; 4], slots: &[usize]) -> Hd<N> {
+    let p: [Hv<N>; 4] = std::array::from_fn(|k| match slots.iter().position(|&s| s == k) {
+        Some(c) => point(&x[k], c),
+        None => [Hd::c(x[k].x), Hd::c(x[k].y), Hd::c(x[k].z)],
+    });
+    squared_distance_of(f, &p)
 }
 
 /// Squared distance of the features `f` (value only).

@@ -35,19 +35,30 @@
 //! Collision detection: every Newton step is shortened to the largest fraction along which no
 //! pair's gap falls below 10 % of its value (conservative advancement with the bound
 //! |Δdist| ≤ max|Δx| of each primitive's nodes; the additive CCD of Li, Kaufman & Jiang 2021
-//! in its plain form).
+//! in its plain form; `contact::ccd`).
+//!
+//! Cost: the pairs' energies are summed per closest feature before the distance is
+//! differentiated (`potential.rs`: stacked plies give dozens of pairs per stacked vertex pair,
+//! nearly all measuring one vertex–vertex or vertex–edge distance); each candidate's reference
+//! constants are computed once and kept; and the converged state's pairs, already evaluated
+//! by the last Newton iteration, are reused on commit.
 
 use std::collections::HashMap;
+use std::sync::{Arc, Mutex, RwLock};
 use std::time::Instant;
 
-use nalgebra::{Matrix3, SMatrix, Vector3};
+use nalgebra::{Matrix3, Vector3};
 use rayon::prelude::*;
-use serde::Serialize;
 
-use super::broad_phase::candidates;
+use super::autodiff::Hd;
+use super::broad_phase::{candidates, Pads, Sweep};
 use super::friction::{Friction, FrictionTerm};
-use super::primitives::{cross_squared, edge_edge_feature, mollifier, point_triangle_feature, squared_distance, squared_distance_value, Feature};
+use super::potential::{derivative, group, mollified_derivative, Blocks, Derivative, FeatureKey, FxMap, Scalar};
+pub use super::report::{SurfaceIncrement, SurfaceTimings};
+pub use super::settings::{SurfaceSettings, SurfaceSetup};
+use super::primitives::{edge_edge_feature, mollifier, point_triangle_feature, squared_distance_value, Feature};
 use crate::contact::barrier::barrier;
+use crate::contact::ccd::conservative_advancement;
 use crate::element::NODE_DOFS;
 use crate::model::{Model, State};
 use crate::solver::NodalForces;
@@ -65,64 +76,11 @@ const SLIDE_ARG: f64 = 2.0;
 /// Edge–edge mollifier threshold ε = 10⁻³ |e_a|²|e_b|² (reference lengths), as in IPC.
 const MOLLIFIER: f64 = 1e-3;
 
-/// Surface contact controls.
-#[derive(Clone, Debug, Serialize, serde::Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct SurfaceSettings {
-    /// Barrier thickness d̂ as a fraction f of the contact distance c̄ (0 < f < 1).
-    pub distance_factor: f64,
-    /// Factor on the automatic barrier stiffness.
-    pub stiffness_factor: f64,
-    /// Coulomb friction coefficient between surfaces.
-    pub friction: f64,
-    /// Stick regularisation δ of the friction as a multiple of d̂.
-    pub friction_slip: f64,
-    /// Whether a part's surface also contacts itself (folds).
-    pub self_contact: bool,
-    /// Largest compression of the plies' thickness, as a fraction of the thinner ply's
-    /// thickness, that a converged state may show before its nodes' κ is doubled.
-    pub compression_tolerance: f64,
-}
+/// Slack of the sweep boxes, as a fraction of the smallest pad (see [`Sweep`]).
+const SWEEP_SLACK: f64 = 1e-6;
 
-impl Default for SurfaceSettings {
-    /// d̂ = 0.2 c̄, κ factor 1, friction 0.3 (woven fabrics on each other measure about
-    /// 0.2–0.5, e.g. Ajayi 1992, *Textile Res. J.* 62), δ = d̂, self-contact on.
-    fn default() -> Self {
-        Self { distance_factor: 0.2, stiffness_factor: 1.0, friction: 0.3, friction_slip: 1.0, self_contact: true, compression_tolerance: 0.05 }
-    }
-}
-
-impl SurfaceSettings {
-    /// The first setting out of range: (key, what was expected).
-    pub fn problem(&self) -> Option<(&'static str, &'static str)> {
-        let pos = |x: f64| x.is_finite() && x > 0.0;
-        if !(pos(self.distance_factor) && self.distance_factor < 1.0) {
-            return Some(("distance_factor", "expected a barrier thickness factor between 0 and 1 (exclusive)"));
-        }
-        if !pos(self.stiffness_factor) {
-            return Some(("stiffness_factor", "expected a positive stiffness factor"));
-        }
-        if !(self.friction.is_finite() && self.friction >= 0.0) {
-            return Some(("friction", "expected a non-negative friction coefficient"));
-        }
-        if !pos(self.friction_slip) {
-            return Some(("friction_slip", "expected a positive stick regularisation factor"));
-        }
-        if !pos(self.compression_tolerance) {
-            return Some(("compression_tolerance", "expected a positive fraction of the ply thickness"));
-        }
-        None
-    }
-}
-
-/// Which parts take part in surface contact, with the controls.
-#[derive(Clone, Debug)]
-pub struct SurfaceSetup {
-    /// Model part indices (every pair of them, and each with itself when self-contact is on).
-    pub parts: Vec<usize>,
-    /// Controls.
-    pub settings: SurfaceSettings,
-}
+/// A candidate pair: kind, key, nodes and reference constants.
+type Pair = (Kind, (usize, usize), [usize; 4], Constants);
 
 /// Kind of a pair.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -146,6 +104,13 @@ struct Term {
     kind: Kind,
     key: (usize, usize),
     nodes: [usize; 4],
+    /// The closest feature, whose distance the energy depends on.
+    feature: FeatureKey,
+    /// Energy and its first two derivatives in the feature's distance.
+    scalar: Scalar,
+    /// Gradient and Hessian in all four nodes of a pair with the edge–edge mollifier (it
+    /// depends on more than the distance), when derivatives were asked for.
+    mollified: Option<Box<Hd<12>>>,
     gap: f64,
     dhat: f64,
     /// Thickness of the thinner ply of the pair.
@@ -155,31 +120,6 @@ struct Term {
     force: f64,
     normal: Vector3<f64>,
     weights: [f64; 4],
-    grad: [f64; 12],
-    hess: Option<Box<SMatrix<f64, 12, 12>>>,
-}
-
-/// Per converged state: active pairs and forces.
-#[derive(Clone, Debug, Default, Serialize)]
-pub struct SurfaceIncrement {
-    /// Point–triangle pairs within their barrier thickness.
-    pub point_triangle: usize,
-    /// Edge–edge pairs within their barrier thickness.
-    pub edge_edge: usize,
-    /// Active pairs per contact node.
-    pub pairs_per_node: f64,
-    /// Smallest gap (m) over the active pairs.
-    pub min_gap: f64,
-    /// Smallest gap as a fraction of its pair's d̂.
-    pub min_gap_ratio: f64,
-    /// Sum of the pairs' normal forces (N).
-    pub normal_force: f64,
-    /// Pairs with friction sliding.
-    pub sliding: usize,
-    /// Contact potential (barrier and friction), J.
-    pub potential: f64,
-    /// Nodes whose κ was doubled at this state.
-    pub stiffened: usize,
 }
 
 /// Barrier contact between shell surfaces (a [`NodalForces`] term).
@@ -199,11 +139,30 @@ pub struct SurfaceContact {
     kappa: Vec<f64>,
     kappa0: Vec<f64>,
     settings: SurfaceSettings,
+    /// Twice the largest half thickness (the reach of the coupling prediction).
     reach: f64,
-    friction: HashMap<(Kind, usize, usize), Friction>,
+    /// Broad-phase pads: each point's, triangle's and edge's largest half thickness (a pair
+    /// is active only within c = the sum of its two primitives' pads).
+    point_pad: Vec<f64>,
+    tri_pad: Vec<f64>,
+    edge_pad: Vec<f64>,
+    /// The pads widened by the sweep slack σ, and σ.
+    sweep_pads: (Vec<f64>, Vec<f64>, Vec<f64>),
+    slack: f64,
+    /// The candidates of the last collision-detection sweep.
+    sweep: Mutex<Option<Sweep<Pair>>>,
+    friction: FxMap<(Kind, usize, usize), Friction>,
+    /// Reference constants per candidate pair (None: excluded), filled as pairs come near.
+    constants: RwLock<FxMap<(Kind, usize, usize), Option<Constants>>>,
     last: Vec<Term>,
+    /// Friction terms of the last evaluation (without Hessians).
+    last_friction: Vec<FrictionTerm>,
+    /// Contact nodes' displacements at the last evaluation.
+    last_u: Vec<Vector3<f64>>,
     last_potential: f64,
     search_s: f64,
+    /// Wall time split, for the summary.
+    timings: std::sync::Mutex<SurfaceTimings>,
     /// Per-converged-state reports.
     pub increments: Vec<SurfaceIncrement>,
 }
@@ -294,6 +253,12 @@ impl SurfaceContact {
             })
             .collect();
         let reach = 2.0 * half.iter().copied().fold(0.0, f64::max);
+        let point_pad: Vec<f64> = points.iter().map(|&a| half[a]).collect();
+        let tri_pad: Vec<f64> = tris.iter().map(|t| t.iter().map(|&a| half[a]).fold(0.0, f64::max)).collect();
+        let edge_pad: Vec<f64> = edges.iter().map(|e| half[e[0]].max(half[e[1]])).collect();
+        let slack = SWEEP_SLACK * point_pad.iter().copied().filter(|&r| r > 0.0).fold(f64::INFINITY, f64::min).min(1.0);
+        let widen = |v: &[f64]| v.iter().map(|r| r + slack).collect::<Vec<f64>>();
+        let sweep_pads = (widen(&point_pad), widen(&tri_pad), widen(&edge_pad));
         Self {
             x_ref: model.x0.clone(),
             points,
@@ -311,10 +276,20 @@ impl SurfaceContact {
             kappa,
             settings: setup.settings.clone(),
             reach,
-            friction: HashMap::new(),
+            point_pad,
+            tri_pad,
+            edge_pad,
+            sweep_pads,
+            slack,
+            sweep: Mutex::new(None),
+            friction: FxMap::default(),
+            constants: RwLock::new(FxMap::default()),
             last: Vec::new(),
+            last_friction: Vec::new(),
+            last_u: Vec::new(),
             last_potential: 0.0,
             search_s: 0.0,
+            timings: std::sync::Mutex::new(SurfaceTimings::default()),
             increments: Vec::new(),
         }
     }
@@ -386,28 +361,72 @@ impl SurfaceContact {
         Some(Constants { offset: cm - dhat, dhat, eps })
     }
 
-    /// Candidate pairs near configuration(s) `configs`, with their nodes and constants.
-    fn pairs(&self, configs: &[&dyn Fn(usize) -> Vector3<f64>], reach: f64) -> Vec<(Kind, (usize, usize), [usize; 4], Constants)> {
-        let (pt, ee) = candidates(&self.points, &self.tris, &self.edges, configs, reach, &|i, t| self.point_ok(i, t), &|a, b| self.edge_ok(a, b));
-        pt.into_iter()
-            .map(|k| (Kind::PointTriangle, k))
-            .chain(ee.into_iter().map(|k| (Kind::EdgeEdge, k)))
-            .collect::<Vec<_>>()
-            .into_par_iter()
-            .filter_map(|(kind, key)| {
-                let nodes = self.nodes(kind, key);
-                self.constants(kind, &nodes).map(|c| (kind, key, nodes, c))
-            })
-            .collect()
+    /// Each primitive's own contact pad: every pair that can be active (closer than c, the
+    /// sum of its primitives' half thicknesses) or reach zero gap along a sweep is found.
+    fn pads(&self) -> Pads<'_> {
+        Pads { point: &self.point_pad, tri: &self.tri_pad, edge: &self.edge_pad }
     }
 
-    /// The active pairs at `state` (gap below d̂), with energy, gradient and — when
-    /// `hessian` — the PSD-projected Hessian. A pair at or through zero gap has infinite energy.
-    fn evaluate(&self, model: &Model, state: &State, hessian: bool) -> Vec<Term> {
+    /// The last sweep's candidates when configuration `x` lies within its slack of the sweep
+    /// (see [`Sweep`]), else None.
+    fn swept_pairs(&self, x: &(dyn Fn(usize) -> Vector3<f64> + Sync)) -> Option<Arc<Vec<Pair>>> {
+        let sw = self.sweep.lock().ok()?;
+        sw.as_ref()?.pairs_at(&self.points, x, self.slack)
+    }
+
+    /// Candidate pairs near configuration(s) `configs`, with their nodes and constants (from
+    /// the cache of reference constants; those of pairs new to it are computed and kept).
+    fn pairs(&self, configs: &[&dyn Fn(usize) -> Vector3<f64>], pads: &Pads) -> Vec<(Kind, (usize, usize), [usize; 4], Constants)> {
+        let (pt, ee) = candidates(&self.points, &self.tris, &self.edges, configs, pads, &|i, t| self.point_ok(i, t), &|a, b| self.edge_ok(a, b));
+        let all: Vec<(Kind, (usize, usize))> = pt.into_iter().map(|k| (Kind::PointTriangle, k)).chain(ee.into_iter().map(|k| (Kind::EdgeEdge, k))).collect();
+        let cached: Vec<Option<Option<Constants>>> = {
+            let cache = self.constants.read().unwrap_or_else(|e| e.into_inner());
+            all.par_iter().map(|&(kind, key)| cache.get(&(kind, key.0, key.1)).copied()).collect()
+        };
+        let fresh: Vec<((Kind, usize, usize), Option<Constants>)> = all
+            .par_iter()
+            .zip(&cached)
+            .filter(|(_, c)| c.is_none())
+            .map(|(&(kind, key), _)| ((kind, key.0, key.1), self.constants(kind, &self.nodes(kind, key))))
+            .collect();
+        let computed: FxMap<(Kind, usize, usize), Option<Constants>> = fresh.into_iter().collect();
+        let out = all
+            .par_iter()
+            .zip(&cached)
+            .filter_map(|(&(kind, key), c)| {
+                let c = match c {
+                    Some(c) => *c,
+                    None => computed.get(&(kind, key.0, key.1)).copied().flatten(),
+                };
+                c.map(|c| (kind, key, self.nodes(kind, key), c))
+            })
+            .collect();
+        if !computed.is_empty() {
+            self.constants.write().unwrap_or_else(|e| e.into_inner()).extend(computed);
+        }
+        out
+    }
+
+    /// The active pairs at `state` (gap below d̂): gap, energy κ_p m_p b(d, d̂_p), normal force
+    /// and closest-point weights, with the energy's first two derivatives in the distance of
+    /// the pair's closest feature (summed per feature and differentiated in the nodes by
+    /// [`potential::derivative`](super::potential::derivative)); a pair inside the edge–edge
+    /// mollifier's range is differentiated on its own in all four nodes when `derivatives`.
+    /// A pair at or through zero gap has infinite energy.
+    fn evaluate(&self, model: &Model, state: &State, derivatives: bool) -> Vec<Term> {
         let x = |a: usize| model.x0[a] + state.u[a];
-        self.pairs(&[&x], self.reach)
-            .into_par_iter()
-            .filter_map(|(kind, key, nodes, c)| {
+        let swept = self.swept_pairs(&x);
+        if let Ok(mut tm) = self.timings.lock() {
+            if swept.is_some() {
+                tm.evaluations_on_sweep += 1;
+            } else {
+                tm.evaluations_searched += 1;
+            }
+        }
+        let pairs = swept.unwrap_or_else(|| Arc::new(self.pairs(&[&x], &self.pads())));
+        pairs
+            .par_iter()
+            .filter_map(|&(kind, key, nodes, c)| {
                 let xs = nodes.map(x);
                 let (feat, weights) = Self::feature(kind, &xs);
                 let dist = squared_distance_value(feat, &xs).sqrt();
@@ -419,40 +438,50 @@ impl SurfaceContact {
                 let r: Vector3<f64> = (0..4).map(|k| xs[k] * weights[k]).sum();
                 let normal = if dist > 0.0 { r / dist } else { Vector3::zeros() };
                 let thin = 2.0 * nodes.iter().map(|&a| self.half[a]).fold(f64::INFINITY, f64::min);
-                let mut term = Term { kind, key, nodes, gap, dhat: c.dhat, thin, energy: f64::INFINITY, force: f64::INFINITY, normal, weights, grad: [0.0; 12], hess: None };
+                let feature = FeatureKey::of(feat, &nodes);
+                let inf = Scalar { e: f64::INFINITY, e1: 0.0, e2: 0.0 };
+                let mut term = Term { kind, key, nodes, feature, scalar: inf, mollified: None, gap, dhat: c.dhat, thin, energy: f64::INFINITY, force: f64::INFINITY, normal, weights };
                 if gap <= 0.0 {
                     return Some(term);
                 }
                 let (b, b1, b2) = barrier(gap, c.dhat);
-                // κ b(√s − c_p) (× m(|e_a × e_b|²) for nearly parallel edges) in second-order
-                // automatic differentiation: the exact gradient and Hessian. The Hessian is
-                // not projected: a pair pressed onto a vertex or an edge of the other surface
-                // has a negative tangential stiffness κ b′ ∇²dist (the force turns as the point
-                // slides), and Newton without it stalls where plies slide on each other
-                // (the NBC sleeve in a static step stopped at a residual of 10⁻⁶ with a
-                // projected or Gauss–Newton tangent; it converges with the exact one).
-                let sd = squared_distance(feat, &xs);
-                let (dd, ddd) = (0.5 / dist, -0.25 / (dist * dist * dist));
-                let mut e = sd.chain(kap * b, kap * b1 * dd, kap * (b2 * dd * dd + b1 * ddd));
+                // κ b(√q − c_p) (× m(|e_a × e_b|²) for nearly parallel edges): its exact
+                // gradient and Hessian follow by second-order automatic differentiation of the
+                // squared distance q. The Hessian is not projected: a pair pressed onto a
+                // vertex or an edge of the other surface has a negative tangential stiffness
+                // κ b′ ∇²dist (the force turns as the point slides), and Newton without it
+                // stalls where plies slide on each other (the NBC sleeve in a static step
+                // stopped at a residual of 10⁻⁶ with a projected or Gauss–Newton tangent; it
+                // converges with the exact one).
                 let mut m = 1.0;
                 if kind == Kind::EdgeEdge {
                     let (u, v) = (xs[1] - xs[0], xs[3] - xs[2]);
-                    if u.cross(&v).norm_squared() < c.eps {
-                        let cs = cross_squared(&xs);
-                        let (mv, m1, m2) = mollifier(cs.v, c.eps);
-                        m = mv;
-                        e = e * cs.chain(mv, m1, m2);
+                    let cs2 = u.cross(&v).norm_squared();
+                    if cs2 < c.eps {
+                        m = mollifier(cs2, c.eps).0;
+                        if derivatives {
+                            let f = Scalar { e: kap * b, e1: kap * b1, e2: kap * b2 };
+                            term.mollified = Some(Box::new(mollified_derivative(&nodes, &feature, &f, c.eps, &x)));
+                        }
                     }
                 }
-                term.energy = e.v;
+                term.scalar = Scalar { e: kap * b * m, e1: kap * b1, e2: kap * b2 };
+                term.energy = kap * b * m;
                 term.force = -kap * m * b1;
-                term.grad = e.g;
-                if hessian {
-                    term.hess = Some(Box::new(SMatrix::<f64, 12, 12>::from_fn(|i, j| 0.5 * (e.h[i][j] + e.h[j][i]))));
-                }
                 Some(term)
             })
             .collect()
+    }
+
+    /// Forces and tangent blocks of the barrier terms: per closest feature for the pairs
+    /// without mollifier, per pair for those with it.
+    fn barrier_derivatives(&self, terms: &[Term], x: &(dyn Fn(usize) -> Vector3<f64> + Sync)) -> Vec<Derivative> {
+        let grouped = group(terms.iter().filter(|t| t.mollified.is_none() && t.energy.is_finite()).map(|t| (t.feature, t.scalar)));
+        let n_mollified = terms.iter().filter(|t| t.mollified.is_some()).count();
+        let mut out: Vec<Derivative> = Vec::with_capacity(grouped.len() + n_mollified);
+        out.par_extend(grouped.par_iter().map(|(k, s)| derivative(k, s, x)));
+        out.extend(terms.iter().filter_map(|t| t.mollified.as_ref().map(|e| Derivative::Four(t.nodes, **e))));
+        out
     }
 
     /// Friction potentials of the committed pairs at `x`.
@@ -471,30 +500,6 @@ impl SurfaceContact {
     }
 }
 
-/// Accumulates a pair's gradient and Hessian: forces −∇E into `f_ext`, blocks −∇²E per node
-/// (`diag`) and per node pair a < b (`off`, the block of row a, column b).
-fn scatter(nodes: &[usize; 4], grad: &[f64; 12], hess: Option<&SMatrix<f64, 12, 12>>, f_ext: &mut [f64], diag: &mut HashMap<usize, Matrix3<f64>>, off: &mut HashMap<(usize, usize), Matrix3<f64>>) {
-    for (k, &a) in nodes.iter().enumerate() {
-        for c in 0..3 {
-            f_ext[NODE_DOFS * a + c] -= grad[3 * k + c];
-        }
-    }
-    let Some(h) = hess else { return };
-    for (i, &a) in nodes.iter().enumerate() {
-        for (j, &b) in nodes.iter().enumerate() {
-            if a > b || (a == b && i != j) {
-                continue;
-            }
-            let block = Matrix3::from_fn(|p, q| h[(3 * i + p, 3 * j + q)]);
-            if a == b {
-                *diag.entry(a).or_insert_with(Matrix3::zeros) -= block;
-            } else {
-                *off.entry((a, b)).or_insert_with(Matrix3::zeros) -= block;
-            }
-        }
-    }
-}
-
 impl NodalForces for SurfaceContact {
     fn add(&mut self, model: &Model, state: &State, f_ext: &mut [f64], jacobian: &mut Vec<(usize, Matrix3<f64>)>) {
         let mut pairs = Vec::new();
@@ -509,7 +514,7 @@ impl NodalForces for SurfaceContact {
         let fr = self.friction_terms(&x, true);
         self.search_s += t.elapsed().as_secs_f64();
         let mut pot = 0.0;
-        let (mut diag, mut off) = (HashMap::new(), HashMap::new());
+        let mut blocks = Blocks::default();
         for term in &terms {
             if !term.energy.is_finite() {
                 // Through the offset surface: inadmissible (the line search backs off).
@@ -518,18 +523,27 @@ impl NodalForces for SurfaceContact {
                 continue;
             }
             pot += term.energy;
-            scatter(&term.nodes, &term.grad, term.hess.as_deref(), f_ext, &mut diag, &mut off);
+        }
+        if pot.is_finite() {
+            for d in self.barrier_derivatives(&terms, &x) {
+                blocks.add_derivative(&d, f_ext, true);
+            }
         }
         for ft in &fr {
             pot += ft.energy;
-            scatter(&ft.nodes, &ft.grad, ft.hess.as_ref(), f_ext, &mut diag, &mut off);
+            blocks.add_weighted(&ft.nodes, &ft.weights, &ft.g, ft.k.as_ref(), f_ext);
         }
-        jacobian.extend(diag);
+        jacobian.extend(blocks.diag);
         // The solver adds the symmetric part −½(J + Jᵀ) of a pushed block J at (a, b) and
         // (b, a): pushing 2J once for a < b gives J at (a, b) and Jᵀ at (b, a).
-        pairs.extend(off.into_iter().map(|((a, b), j)| (a, b, j * 2.0)));
+        pairs.extend(blocks.off.into_iter().map(|((a, b), j)| (a, b, j * 2.0)));
         self.last = terms;
+        self.last_friction = fr.into_iter().map(|f| FrictionTerm { k: None, ..f }).collect();
+        self.last_u = self.points.iter().map(|&a| state.u[a]).collect();
         self.last_potential = pot;
+        if let Ok(mut tm) = self.timings.lock() {
+            tm.evaluate += t.elapsed().as_secs_f64();
+        }
     }
 
     fn potential(&self) -> Option<f64> {
@@ -545,20 +559,21 @@ impl NodalForces for SurfaceContact {
     /// of the step, so from a gap g it may advance by (g − g_min)/ℓ, g_min = (1 − CCD_CLOSE) g₀,
     /// repeatedly; the smallest fraction over all candidate pairs of the sweep is the bound.
     fn max_step(&self, model: &Model, from: &State, to: &State) -> f64 {
+        let t = Instant::now();
         let x0 = |a: usize| model.x0[a] + from.u[a];
         let x1 = |a: usize| model.x0[a] + to.u[a];
-        let s = self
-            .pairs(&[&x0, &x1], self.reach)
-            .into_par_iter()
-            .map(|(kind, _, nodes, c)| {
+        let (pp, tp, ep) = &self.sweep_pads;
+        let pairs = Arc::new(self.pairs(&[&x0, &x1], &Pads { point: pp, tri: tp, edge: ep }));
+        let s = pairs
+            .par_iter()
+            .map(|&(kind, _, nodes, c)| {
                 let a = nodes.map(x0);
                 let d: [Vector3<f64>; 4] = std::array::from_fn(|k| x1(nodes[k]) - a[k]);
                 let (m1, m2) = match kind {
                     Kind::PointTriangle => (d[0].norm(), d[1].norm().max(d[2].norm()).max(d[3].norm())),
                     Kind::EdgeEdge => (d[0].norm().max(d[1].norm()), d[2].norm().max(d[3].norm())),
                 };
-                let len = m1 + m2;
-                if len == 0.0 {
+                if m1 + m2 == 0.0 {
                     return 1.0;
                 }
                 let gap_at = |s: f64| {
@@ -566,38 +581,43 @@ impl NodalForces for SurfaceContact {
                     let (feat, _) = Self::feature(kind, &xs);
                     squared_distance_value(feat, &xs).sqrt() - c.offset
                 };
-                let g0 = gap_at(0.0);
-                if g0 <= 0.0 {
-                    return 0.0;
-                }
-                let gmin = (1.0 - CCD_CLOSE) * g0;
-                let (mut s, mut g) = (0.0f64, g0);
-                for _ in 0..100 {
-                    let ds = (g - gmin) / len;
-                    if s + ds >= 1.0 {
-                        return 1.0;
-                    }
-                    s += ds;
-                    if ds < 1e-6 {
-                        break;
-                    }
-                    g = gap_at(s);
-                    if g <= gmin * 1.000_001 {
-                        break;
-                    }
-                }
-                s
+                conservative_advancement(gap_at(0.0), m1 + m2, CCD_CLOSE, 100, |s| Some(gap_at(s)))
             })
             .reduce(|| 1.0, f64::min);
+        let lo = self.points.iter().map(|&a| x0(a).inf(&x1(a))).collect();
+        let hi = self.points.iter().map(|&a| x0(a).sup(&x1(a))).collect();
+        if let Ok(mut sw) = self.sweep.lock() {
+            *sw = Some(Sweep::new(lo, hi, pairs));
+        }
+        if let Ok(mut tm) = self.timings.lock() {
+            tm.ccd += t.elapsed().as_secs_f64();
+        }
         s
     }
 
+    /// Reports the converged `state`, moves the friction anchors of sliding pairs (return
+    /// mapping), commits every active pair's friction data and doubles κ where a pair came
+    /// too close. The pairs are those of the last evaluation when it was at this very state
+    /// (the last Newton iterate, bit for bit), else evaluated anew.
     fn commit(&mut self, model: &Model, state: &State) -> Option<serde_json::Value> {
         let t = Instant::now();
-        let terms = self.evaluate(model, state, false);
         let x = |a: usize| model.x0[a] + state.u[a];
-        let fr = self.friction_terms(&x, false);
-        self.search_s += t.elapsed().as_secs_f64();
+        let same = self.last_u.len() == self.points.len() && self.points.iter().zip(&self.last_u).all(|(&a, u)| state.u[a] == *u);
+        let (terms, fr) = if same {
+            (std::mem::take(&mut self.last), std::mem::take(&mut self.last_friction))
+        } else {
+            let terms = self.evaluate(model, state, false);
+            let fr = self.friction_terms(&x, false);
+            self.search_s += t.elapsed().as_secs_f64();
+            (terms, fr)
+        };
+        if let Ok(mut tm) = self.timings.lock() {
+            if same {
+                tm.commits_reused += 1;
+            } else {
+                tm.commits_evaluated += 1;
+            }
+        }
         let mut rep = SurfaceIncrement { min_gap: f64::INFINITY, min_gap_ratio: f64::INFINITY, ..Default::default() };
         // Sliding pairs' anchors trail (return mapping); others keep theirs.
         let mut old = std::mem::take(&mut self.friction);
@@ -670,7 +690,19 @@ impl NodalForces for SurfaceContact {
             rep.min_gap_ratio = 0.0;
         }
         rep.pairs_per_node = terms.len() as f64 / self.points.len().max(1) as f64;
+        let mut features: Vec<FeatureKey> = terms.iter().map(|t| t.feature).collect();
+        features.sort_unstable();
+        features.dedup();
+        rep.features = features.len();
+        rep.features_per_node = rep.features as f64 / self.points.len().max(1) as f64;
         self.last = terms;
+        // κ and the friction data changed: the next commit evaluates anew unless an
+        // assembly comes first.
+        self.last_u.clear();
+        self.last_friction.clear();
+        if let Ok(mut tm) = self.timings.lock() {
+            tm.commit += t.elapsed().as_secs_f64();
+        }
         self.increments.push(rep.clone());
         serde_json::to_value(serde_json::json!({ "surface_contact": rep })).ok()
     }
@@ -719,14 +751,16 @@ impl NodalForces for SurfaceContact {
                 "max_pairs_per_node": max_pairs,
                 "final": last,
                 "search_s": self.search_s,
+                "timings": self.timings.lock().map(|t| t.clone()).unwrap_or_default(),
             }),
         ))
     }
 
     fn couplings(&self, model: &Model) -> Vec<(usize, usize)> {
         let x = |a: usize| model.x0[a];
+        let (pp, tp, ep) = (vec![self.reach; self.points.len()], vec![self.reach; self.tris.len()], vec![self.reach; self.edges.len()]);
         let mut out: Vec<(usize, usize)> = self
-            .pairs(&[&x], 2.0 * self.reach)
+            .pairs(&[&x], &Pads { point: &pp, tri: &tp, edge: &ep })
             .into_iter()
             .flat_map(|(_, _, nodes, _)| {
                 let mut v = Vec::with_capacity(6);
