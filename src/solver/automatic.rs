@@ -75,24 +75,8 @@ impl Solver<'_> {
                     tau = next;
                     inc += 1;
                     self.commit_nodal_forces(state);
-                    let (negative_pivots, stiffness_parameter, stability_event) = self.stability_at(state, start, &step.target_scales, tracker);
-                    let report = IncrementReport {
-                        step: si,
-                        step_name: step.name.clone(),
-                        increment: inc,
-                        time: si as f64 + tau,
-                        scales: trial_scales.clone(),
-                        iterations,
-                        residuals,
-                        cutbacks,
-                        indefinite_tangent: indefinite,
-                        energy,
-                        extra: std::mem::take(&mut self.extra_reports),
-                        negative_pivots,
-                        stiffness_parameter,
-                        stability_event,
-                        ..Default::default()
-                    };
+                    let stability = self.stability_at(state, start, &step.target_scales, tracker);
+                    let report = self.static_report(si, step, inc, tau, &trial_scales, (iterations, residuals, cutbacks, indefinite, energy), stability);
                     on_increment(&report, state, self);
                     if tau >= 1.0 {
                         return Ok(trial_scales);

@@ -562,6 +562,40 @@ impl<'m> Solver<'m> {
             .fold(0.0, f64::max)
     }
 
+    /// Report of a converged static increment `increment` of step `si` ending at fraction
+    /// `tau` with load `scales`: its Newton record (iterations, residuals, cut-backs,
+    /// indefinite tangent, strain energy), its stability (negative pivots, stiffness
+    /// parameter, event) and the nodal-force terms' reports of its commit.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn static_report(
+        &mut self,
+        si: usize,
+        step: &StepPlan,
+        increment: usize,
+        tau: f64,
+        scales: &[f64],
+        (iterations, residuals, cutbacks, indefinite, energy): (usize, Vec<f64>, usize, bool, f64),
+        (negative_pivots, stiffness_parameter, stability_event): (Option<usize>, Option<f64>, Option<String>),
+    ) -> IncrementReport {
+        IncrementReport {
+            step: si,
+            step_name: step.name.clone(),
+            increment,
+            time: si as f64 + tau,
+            scales: scales.to_vec(),
+            iterations,
+            residuals,
+            cutbacks,
+            indefinite_tangent: indefinite,
+            energy,
+            extra: std::mem::take(&mut self.extra_reports),
+            negative_pivots,
+            stiffness_parameter,
+            stability_event,
+            ..Default::default()
+        }
+    }
+
     /// Newton iterations for one increment ending at `scales`, starting from `state`.
     /// With `early_exit` (automatic increments) the attempt stops as soon as divergence shows.
     pub(super) fn attempt(&mut self, state: &mut State, scales: &[f64], linear: bool, early_exit: bool, progress: &mut dyn FnMut(usize, f64)) -> Attempt {
@@ -769,29 +803,12 @@ impl<'m> Solver<'m> {
                             }
                             if (tau - goal).abs() < 1e-12 {
                                 tau = goal;
-                                let (negative_pivots, stiffness_parameter, stability_event) = if step.linear {
+                                let stability = if step.linear {
                                     (None, None, None)
                                 } else {
                                     self.stability_at(state, &start, &step.target_scales, &mut tracker)
                                 };
-                                let report = IncrementReport {
-                                    step: si,
-                                    step_name: step.name.clone(),
-                                    increment: inc,
-                                    time: si as f64 + tau,
-                                    scales: scales.clone(),
-                                    iterations,
-                                    residuals,
-                                    cutbacks,
-                                    indefinite_tangent: indefinite,
-                                    energy,
-                                    extra: std::mem::take(&mut self.extra_reports),
-                                    negative_pivots,
-                                    stiffness_parameter,
-                                    stability_event,
-                                    dynamics: None,
-                                    ..Default::default()
-                                };
+                                let report = self.static_report(si, step, inc, tau, &scales, (iterations, residuals, cutbacks, indefinite, energy), stability);
                                 on_increment(&report, state, self);
                                 break;
                             }
