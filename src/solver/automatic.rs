@@ -99,16 +99,8 @@ impl Solver<'_> {
                     dtau *= 0.25;
                     if dtau < min_dtau * (1.0 - 1e-9) {
                         let cause = super::diagnose::explain(self.model, state, &cause, indefinite || self.cholesky.kind() == FactorKind::Ldlt);
-                        return Err(SolveError {
-                            step: si,
-                            step_name: step.name.clone(),
-                            last_converged_time: si as f64 + tau,
-                            simulated_time: None,
-                            iteration,
-                            residuals,
-                            worst_element,
-                            cause: format!("{cause}; automatic increment cut to {:.3e} of the step (max_cutbacks = {} quarterings of the first)", dtau * 4.0, self.settings.max_cutbacks),
-                        });
+                        let cause = format!("{cause}; automatic increment cut to {:.3e} of the step (max_cutbacks = {} quarterings of the first)", dtau * 4.0, self.settings.max_cutbacks);
+                        return Err(SolveError::static_increment(si, step, tau, iteration, residuals, worst_element, cause));
                     }
                 }
             }

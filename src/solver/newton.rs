@@ -153,6 +153,15 @@ pub struct SolveError {
     pub cause: String,
 }
 
+impl SolveError {
+    /// The failure of a static increment of step `si` (`step`) whose last converged state is
+    /// at fraction `tau` of the step: the failed attempt's iteration, residual history,
+    /// worst element and diagnosis.
+    pub(super) fn static_increment(si: usize, step: &StepPlan, tau: f64, iteration: usize, residuals: Vec<f64>, worst_element: Option<usize>, cause: String) -> Self {
+        Self { step: si, step_name: step.name.clone(), last_converged_time: si as f64 + tau, simulated_time: None, iteration, residuals, worst_element, cause }
+    }
+}
+
 impl std::fmt::Display for SolveError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         let at = match self.simulated_time {
@@ -822,16 +831,8 @@ impl<'m> Solver<'m> {
                             *state = saved;
                             iterations += iteration;
                             if cutback_level >= self.settings.max_cutbacks {
-                                return Err(SolveError {
-                                    step: si,
-                                    step_name: step.name.clone(),
-                                    last_converged_time: si as f64 + tau,
-                                    simulated_time: None,
-                                    iteration,
-                                    residuals,
-                                    worst_element,
-                                    cause: format!("{cause}; increment cut back {} times", cutback_level),
-                                });
+                                let cause = format!("{cause}; increment cut back {} times", cutback_level);
+                                return Err(SolveError::static_increment(si, step, tau, iteration, residuals, worst_element, cause));
                             }
                             cutback_level += 1;
                             cutbacks += 1;
