@@ -17,6 +17,7 @@
 //! assert!((uz - 12.0 * (1.0 - m.cos()) / m).abs() < 0.01 * uz);
 //! ```
 
+pub mod autodiff;
 pub mod element;
 pub mod mesh;
 pub mod material;

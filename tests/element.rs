@@ -136,6 +136,8 @@ fn free_element_zero_energy_modes() {
 
 /// The assembled tangent matches central differences of the assembled residual to 1e-6 at a
 /// strongly deformed state (twisted, stretched, large director rotations), for both materials.
+/// (Nodal moves up to 0.15 m and tilts up to 0.15 rad on 0.5 × 0.3 m elements: twice that
+/// folds an element through a director, a state the orientation barrier refuses.)
 #[test]
 fn global_tangent_matches_finite_differences() {
     for material in ["StVenantKirchhoff(young: 1.0e5, poisson: 0.3)", "NeoHookean(young: 1.0e5, poisson: 0.3)"] {
@@ -151,7 +153,7 @@ fn global_tangent_matches_finite_differences() {
         let asm = Assembler::new(m);
         let n = m.dofs.n_free;
         let mut state = m.initial_state();
-        let du: Vec<f64> = (0..n).map(|i| 0.05 * (((i * 7919) % 13) as f64 - 6.0)).collect();
+        let du: Vec<f64> = (0..n).map(|i| 0.025 * (((i * 7919) % 13) as f64 - 6.0)).collect();
         m.update(&mut state, &du, 1.0);
         let mut vals = vec![0.0; asm.nnz()];
         let mut fint = vec![0.0; 5 * m.n_nodes()];

@@ -15,7 +15,7 @@ use rayon::prelude::*;
 
 use std::sync::Mutex;
 
-use crate::element::{ElemMat, ElemVec, ElementFailure, ElementGeometry, SectionRule, ELEMENT_DOFS, NODE_DOFS};
+use crate::element::{orientation, ElemMat, ElemVec, ElementFailure, ElementGeometry, SectionRule, ELEMENT_DOFS, NODE_DOFS};
 use crate::model::{Model, State, FIXED, UNTIED};
 
 const NO_SLOT: u32 = u32::MAX;
@@ -79,6 +79,9 @@ pub struct Assembler {
     rules: Vec<Result<SectionRule, ElementFailure>>,
     /// Reference geometry of each element (built once; a degenerate element keeps its failure).
     geometry: Vec<Result<ElementGeometry, ElementFailure>>,
+    /// Director orientation barrier of each element: reference corner signs and the corner
+    /// stiffness (`element::orientation`).
+    orientation: Vec<([i8; 4], f64)>,
     /// Entries of elements with tied DOFs that go through the constraint weights:
     /// (local entry i·20+j, slot, w_i w_j), the element's part of Tᵀ K T. Empty for
     /// elements without tied DOFs (their entries all take the direct path).
@@ -322,9 +325,16 @@ impl Assembler {
                 Err(f) => Err(f.clone()),
             })
             .collect();
+        let orientation = (0..model.elements.len())
+            .map(|e| {
+                let el = model.element(e);
+                let kappa = orientation::STIFFNESS * el.section.material.bending_rigidity(el.section.thickness);
+                (orientation::reference_signs(&el.x0, &el.d0), kappa)
+            })
+            .collect();
         let constrained: Vec<bool> = model.elements.iter().map(|el| is_tied(el)).collect();
         let (colours, serial) = colour_elements(model, &constrained);
-        Self { pattern, slots, rules, geometry, tied, linked, colours, serial, project: false }
+        Self { pattern, slots, rules, geometry, orientation, tied, linked, colours, serial, project: false }
     }
 
     /// Number of stored entries of the upper triangle.
@@ -347,7 +357,13 @@ impl Assembler {
         let fail = |failure: ElementFailure| AssemblyFailure { element: e, failure };
         let rule = self.rules[def.section].as_ref().map_err(|f| fail(f.clone()))?;
         let geom = self.geometry[e].as_ref().map_err(|f| fail(f.clone()))?;
-        model.element(e).response_into(rule, geom, &x, &frames, k).map_err(fail)
+        let mut k = k;
+        let (mut force, energy) = model.element(e).response_into(rule, geom, &x, &frames, k.as_deref_mut()).map_err(fail)?;
+        // The director orientation barrier, zero in every regular state.
+        let (signs, kappa) = &self.orientation[e];
+        let current = std::array::from_fn(|a| model.x0[def.nodes[a]] + x[a]);
+        let barrier = orientation::add(&current, &frames, signs, *kappa, &mut force, k).map_err(fail)?;
+        Ok((force, energy + barrier))
     }
 
     /// Adds element `e`'s force to `f_int` and its tangent `k` (if any) to the matrix values,

@@ -1,11 +1,12 @@
 //! The 4-node degenerated shell element and its pieces: kinematic vectors and director
 //! chain (`kinematics`), integration rule and reference geometry (`rule`), tangent
-//! assembly (`tangent`), MITC4+ assumed membrane strains (`membrane`), and the element
-//! itself (`shell4`).
+//! assembly (`tangent`), MITC4+ assumed membrane strains (`membrane`), the director
+//! orientation barrier (`orientation`), and the element itself (`shell4`).
 
 pub mod director;
 mod kinematics;
 mod membrane;
+pub mod orientation;
 pub mod quadrature;
 mod rule;
 pub mod shell4;

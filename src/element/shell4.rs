@@ -124,6 +124,9 @@ pub enum ElementFailure {
     /// Two directors of one element are (nearly) opposite: |d_b − d_a| = `chord` ≥ 2, so the
     /// geodesic between them is undefined.
     DirectorSpread { chord: f64 },
+    /// A nodal director has reached the tangent plane of an element corner: its cosine with
+    /// the corner normal (signed by the reference) is `cosine` ≤ 0 (see `orientation`).
+    DirectorThroughSurface { cosine: f64 },
 }
 
 impl std::fmt::Display for ElementFailure {
@@ -133,6 +136,7 @@ impl std::fmt::Display for ElementFailure {
             ElementFailure::Material(m) => write!(f, "{m}"),
             ElementFailure::ThicknessRule(n) => write!(f, "{n} thickness points (1 to 5 supported)"),
             ElementFailure::DirectorSpread { chord } => write!(f, "directors of neighbouring nodes nearly opposite (|d_b − d_a| = {chord:.6})"),
+            ElementFailure::DirectorThroughSurface { cosine } => write!(f, "a director reached the element's tangent plane (cosine with the corner normal {cosine:.3e})"),
         }
     }
 }

@@ -1,7 +1,6 @@
-//! Incremental-potential contact between shell surfaces: second-order automatic
-//! differentiation, primitive distances, broad phase and the barrier/friction term.
+//! Incremental-potential contact between shell surfaces: primitive distances (derived with
+//! `crate::autodiff`), broad phase and the barrier/friction term.
 
-pub mod autodiff;
 pub mod broad_phase;
 mod friction;
 mod potential;

@@ -24,7 +24,7 @@ use std::hash::{BuildHasherDefault, Hasher};
 
 use nalgebra::{Matrix3, Vector3};
 
-use super::autodiff::{cross, dot, point, Hd, Hv};
+use crate::autodiff::{cross, dot, point, Hd, Hv};
 use super::primitives::{mollifier, squared_distance_in, Feature};
 use crate::element::NODE_DOFS;
 

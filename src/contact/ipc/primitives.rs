@@ -12,7 +12,7 @@
 
 use nalgebra::Vector3;
 
-use super::autodiff::{cross, dot, point, sub, Hd, Hv};
+use crate::autodiff::{cross, dot, point, sub, Hd, Hv};
 
 /// The closest features of a pair: which slots enter the distance.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -50,7 +50,7 @@ use std::time::Instant;
 use nalgebra::{Matrix3, Vector3};
 use rayon::prelude::*;
 
-use super::autodiff::Hd;
+use crate::autodiff::Hd;
 use super::broad_phase::{candidates, Pads, Sweep};
 use super::friction::{Friction, FrictionTerm};
 use super::potential::{derivative, group, mollified_derivative, Blocks, Derivative, FeatureKey, FxMap, Scalar};
