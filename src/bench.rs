@@ -11,6 +11,7 @@ use crate::io::plot::{plot_xy, Series};
 use crate::results::Summary;
 use crate::scene;
 
+pub mod drive;
 pub mod locking;
 
 /// Bundled benchmark scenes.

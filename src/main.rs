@@ -128,6 +128,10 @@ enum Command {
         /// Only the smallest meshes (a quick look).
         #[arg(long)]
         quick: bool,
+        /// The solve-driving cases instead (sheet dropped onto a sphere, sagging plate): time
+        /// steps, Newton iterations, line-search cuts, projected iterations, time split.
+        #[arg(long)]
+        drive: bool,
     },
 }
 
@@ -145,7 +149,7 @@ fn main() -> ExitCode {
         Command::Check { scene } => scene::load(&scene).map_err(|e| e.to_string()).map(|(s, b)| check(&s, &b)),
         Command::Export { scene, inp } => scene::load(&scene).map_err(|e| e.to_string()).and_then(|(s, b)| export_inp(&s, &b, &inp)),
         Command::Import { pattern, out, size, units } => import(&pattern, &out, size.as_deref(), units),
-        Command::Bench { json, quick } => bench::run_all(&json, quick).map_err(|e| e.to_string()),
+        Command::Bench { json, quick, drive } => if drive { bench::drive::run_drive(&json, quick) } else { bench::run_all(&json, quick) }.map_err(|e| e.to_string()),
         Command::Fuzz { corpus, seed, count, solve_every, jobs, work, check_timeout, solve_timeout } => {
             fuzz(corpus, seed, count, solve_every, jobs, work, check_timeout, solve_timeout)
         }
