@@ -69,7 +69,7 @@ const SHEETS: [(&str, &str, &str, &str); 3] = [
     (
         "light_cotton",
         r#"Fabric((preset: Some("light_cotton")))"#,
-        "thickness: 0.3e-3",
+        "thickness: 0.25e-3",
         r#"SelfWeight(part: "sheet", g: (0.0, 0.0, -9.81))"#,
     ),
 ];
@@ -244,7 +244,7 @@ pub fn run_drive(json: &Path, quick: bool) -> Result<(), String> {
             SAGGING_PLATE,
             &[],
             SAG_REFERENCE,
-            |s| s.monitors.first()?.values.last().map(|v| v[1]),
+            |s| s.monitors.first()?.values.last()?.first().copied(),
         );
         print(&r);
         recs.push(r);
