@@ -179,7 +179,7 @@ fn resultant_over_weight(s: &crate::results::Summary, weight: f64) -> Option<f64
 pub fn run_drive(json: &Path, quick: bool) -> Result<(), String> {
     let mut recs: Vec<DriveRecord> = Vec::new();
     println!(
-        "{:<28} {:>8} {:>7} {:>6} {:>7} {:>6} {:>6} {:>8} {:>8} {:>8} {:>10} {:>9}  status",
+        "{:<34} {:>8} {:>7} {:>6} {:>7} {:>6} {:>6} {:>8} {:>8} {:>8} {:>10} {:>9}  status",
         "case",
         "mesh",
         "dofs",
@@ -196,7 +196,7 @@ pub fn run_drive(json: &Path, quick: bool) -> Result<(), String> {
     let print = |r: &DriveRecord| {
         let status: String = r.status.chars().take(60).collect();
         println!(
-            "{:<28} {:>8} {:>7} {:>6} {:>7} {:>6} {:>6} {:>8.2} {:>8.2} {:>8.2} {:>10.5} {:>9.2e}  {status}",
+            "{:<34} {:>8} {:>7} {:>6} {:>7} {:>6} {:>6} {:>8.2} {:>8.2} {:>8.2} {:>10.5} {:>9.2e}  {status}",
             r.case,
             r.mesh,
             r.dofs,
