@@ -305,11 +305,12 @@ fn mitc4plus_rolls_cantilever_into_a_circle() {
 }
 
 /// A garment's plies take their formulation from `garment.shear` (default MITC4): the NBC
-/// sleeve with `shear: Mitc4PlusCentre` builds every ply section with it.
+/// sleeve without the field, and with `shear: Mitc4PlusCentre` or `shear: Sri`, builds every
+/// ply section with the formulation named.
 #[test]
 fn garment_plies_take_the_garment_formulation() {
     let text = std::fs::read_to_string("garments/nbc_sleeve.ron").expect("scene");
-    for (insert, expected) in [("", ShearTreatment::Mitc4), (" shear: Mitc4PlusCentre,", ShearTreatment::Mitc4PlusCentre)] {
+    for (insert, expected) in [("", ShearTreatment::Mitc4), (" shear: Mitc4PlusCentre,", ShearTreatment::Mitc4PlusCentre), (" shear: Sri,", ShearTreatment::Sri)] {
         let t = text.replacen("element_size: 0.02,", &format!("element_size: 0.02,{insert}"), 1);
         let sc = scene::parse("nbc_sleeve", &t).expect("parse");
         let built = scene::build(&sc, "garments/nbc_sleeve.ron", &t).expect("build");
