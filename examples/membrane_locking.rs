@@ -7,7 +7,8 @@
 //!    pinched cylinder (1.8248e-5; Belytschko et al. 1985, reference/
 //!    obstacle_course_linear_reference.csv) against the mesh, regular and distorted (each
 //!    edge divided 1:2:…:N, nodes on the exact cylinder);
-//!    The pinched hemisphere with an 18° hole (0.0924, MacNeal & Harder 1985) likewise;
+//!    The pinched hemisphere with an 18° hole (MacNeal & Harder 1985; reference 0.0924, see
+//!    `bench::locking::HEMISPHERE_REFERENCE` for its sources) likewise;
 //! 2. the fabric quarter-circle arch (`bench::locking::fabric_arch`, analytic curved-beam
 //!    deflection (π/4) f R³ / B) at effective t/R = 1e-3, 3e-3, 7e-3;
 //! 3. microseconds (fastest pass) of one thread per element tangent (and per residual) for MITC4, SRI and

@@ -33,8 +33,8 @@ pub struct GarmentSpec {
     /// panel written without an `outline` (matched by piece name).
     #[serde(default)]
     pub pattern: Option<PatternSource>,
-    /// Element formulation of every ply (default MITC4; `Mitc4Plus`/`Mitc4PlusCentre` for
-    /// assumed membrane strains on curved, distorted panel meshes).
+    /// Element formulation of every ply (default MITC4; `Mitc4PlusCentre` (or the paper's
+    /// `Mitc4Plus`) for assumed membrane strains on curved, distorted panel meshes, `Sri`).
     #[serde(default)]
     pub shear: crate::element::ShearTreatment,
 }
