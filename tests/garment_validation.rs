@@ -222,11 +222,18 @@ fn bad_ply_models_are_named_with_their_position() {
     let sleeve = "placement: Rigid(translation: (1.0, 0.0, 0.0))),";
     let with = |model: &str| GOOD.replace(sleeve, &format!("placement: Rigid(translation: (1.0, 0.0, 0.0)),\n             ply_model: Some({model})),"));
     let panel = Some("garment.panels[sleeve].ply_model");
+    // A two-ply laminated front sewn shut to a two-ply discrete back.
+    let mixed = GOOD
+        .replace(r#"plies: {"shell": (material: "poplin", thickness: 0.0005)},"#, r#"plies: {"shell": (material: "poplin", thickness: 0.0005), "lining": (material: "poplin", thickness: 0.0003)},"#)
+        .replacen(r#"plies: ["shell"]),"#, r#"plies: ["shell", "lining"], ply_model: Some(Laminate)),"#, 1)
+        .replacen(r#"plies: ["shell"],"#, r#"plies: ["shell", "lining"],"#, 1)
+        .replacen("kind: Plain),", r#"kind: Plain, closing: Some("sew")),"#, 1);
     let cases = [
         (with("Bonded"), None, &["Bonded", "Laminate"][..], "Bonded"),
         (with("Laminate"), panel, &["panel \"sleeve\"", "at least two plies"][..], "ply_model"),
         (with("Auto"), panel, &["not implemented"][..], "ply_model"),
         (GOOD.replace("element_size: 0.1,", "element_size: 0.1,\n        ply_model: Auto,"), Some("garment.ply_model"), &["not implemented"][..], "ply_model: Auto"),
+        (mixed, Some("garment.seams[side_right].closing"), &["seam \"side_right\"", "not supported yet"][..], "closing"),
     ];
     for (text, field, words, needle) in cases {
         let e = error_of(&text);

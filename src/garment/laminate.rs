@@ -7,7 +7,8 @@
 //!   with bodies and other panels offsets by half of it).
 //! - Stitch lines and quilting within the panel disappear (the plies are bonded), and no
 //!   inter-ply contact is generated within it; seams tie the laminate shell as a single ply
-//!   (to a discrete partner's outermost ply, or its plies all to the laminate).
+//!   (to a discrete partner's outermost ply, or its plies all to the laminate, keeping their
+//!   initial offsets; sewing such a mixed seam shut is refused).
 //! - The part is named after the panel; every `panel/ply` name of a discrete model stays
 //!   valid as an alias of the laminated part (node sets, loads, monitors), so one scene runs
 //!   in both models: a `Gravity` load on each ply's alias with that ply's areal density sums
@@ -23,8 +24,9 @@ use super::spec::{GarmentSpec, PlyModel};
 use crate::material::{LaminaPly, Laminate, ShellMaterial};
 use crate::scene::{Locator, SceneError};
 
-/// Rejects ply models that cannot be built: `Auto` (not implemented yet) and an explicit
-/// `Laminate` on a panel of a single ply.
+/// Rejects ply models that cannot be built: `Auto` (not implemented yet), an explicit
+/// `Laminate` on a panel of a single ply, and a sewn (`closing`) seam between a laminated
+/// and a discrete multi-ply panel.
 pub fn check(spec: &GarmentSpec, loc: &Locator) -> Result<(), SceneError> {
     if spec.ply_model == PlyModel::Auto {
         return Err(loc.at(None, Some("ply_model"), "garment.ply_model", "ply_model Auto is not implemented yet; use Discrete or Laminate"));
@@ -43,6 +45,19 @@ pub fn check(spec: &GarmentSpec, loc: &Locator) -> Result<(), SceneError> {
                 )));
             }
             _ => {}
+        }
+    }
+    // Sewing a laminate to a discrete stack would close every ply's gap onto the laminate's
+    // one row (or the laminate onto the outermost ply): not modelled yet.
+    let panel = |name: &str| spec.panels.iter().find(|p| p.name == name);
+    for seam in spec.seams.iter().filter(|s| s.closing.is_some()) {
+        let (Some(a), Some(b)) = (panel(&seam.a.panel), panel(&seam.b.panel)) else { continue };
+        let discrete_stack = |p: &super::spec::PanelSpec| p.plies.len() > 1 && !spec.is_laminate(p);
+        if (spec.is_laminate(a) && discrete_stack(b)) || (spec.is_laminate(b) && discrete_stack(a)) {
+            return Err(loc.at(Some(&seam.name), Some("closing"), format!("garment.seams[{}].closing", seam.name), format!(
+                "seam \"{}\" sews laminated and discrete multi-ply panels (\"{}\", \"{}\"): sewing (closing) between the two ply models is not supported yet; make both panels Laminate or both Discrete",
+                seam.name, seam.a.panel, seam.b.panel
+            )));
         }
     }
     Ok(())
