@@ -334,7 +334,7 @@ impl<'a> ShellElement<'a> {
         }
         // MITC4+: the membrane pairs, evaluated once for all levels.
         let tying = rule.membrane.as_ref();
-        let mut mstate = tying.map(|m| MembraneState::new(m, &geom.tying, &rule.forms, &geom.forms, &df, &kin, with_tangent));
+        let mut mstate = tying.map(|m| MembraneState::new(m, &geom.tying, &rule.forms, &geom.forms, df, &kin, with_tangent));
         let mut upper: Upper = [[0.0; ELEMENT_DOFS]; ELEMENT_DOFS];
         let mut energy = 0.0;
         // Generalised forces on the kinematic vectors and the second-derivative matrix
