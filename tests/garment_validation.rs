@@ -213,3 +213,37 @@ fn curved_edge_uses_its_arc_length() {
     }
     assert!(seam.master.len() > 10);
 }
+
+/// Ply fidelity (issue 18): an unknown ply model (a syntax error at the value), a laminate of
+/// a single ply and the not yet implemented `Auto` (per panel and for the garment) are
+/// rejected with the file, line, column and field.
+#[test]
+fn bad_ply_models_are_named_with_their_position() {
+    let sleeve = "placement: Rigid(translation: (1.0, 0.0, 0.0))),";
+    let with = |model: &str| GOOD.replace(sleeve, &format!("placement: Rigid(translation: (1.0, 0.0, 0.0)),\n             ply_model: Some({model})),"));
+    let panel = Some("garment.panels[sleeve].ply_model");
+    // A two-ply laminated front sewn shut to a two-ply discrete back.
+    let mixed = GOOD
+        .replace(r#"plies: {"shell": (material: "poplin", thickness: 0.0005)},"#, r#"plies: {"shell": (material: "poplin", thickness: 0.0005), "lining": (material: "poplin", thickness: 0.0003)},"#)
+        .replacen(r#"plies: ["shell"]),"#, r#"plies: ["shell", "lining"], ply_model: Some(Laminate)),"#, 1)
+        .replacen(r#"plies: ["shell"],"#, r#"plies: ["shell", "lining"],"#, 1)
+        .replacen("kind: Plain),", r#"kind: Plain, closing: Some("sew")),"#, 1);
+    let cases = [
+        (with("Bonded"), None, &["Bonded", "Laminate"][..], "Bonded"),
+        (with("Laminate"), panel, &["panel \"sleeve\"", "at least two plies"][..], "ply_model"),
+        (with("Auto"), panel, &["not implemented"][..], "ply_model"),
+        (GOOD.replace("element_size: 0.1,", "element_size: 0.1,\n        ply_model: Auto,"), Some("garment.ply_model"), &["not implemented"][..], "ply_model: Auto"),
+        (mixed, Some("garment.seams[side_right].closing"), &["seam \"side_right\"", "not supported yet"][..], "closing"),
+    ];
+    for (text, field, words, needle) in cases {
+        let e = error_of(&text);
+        println!("{e}");
+        assert_eq!(e.file, "top.ron");
+        if let Some(f) = field {
+            assert_eq!(e.field, f);
+        }
+        assert!(words.iter().all(|w| e.message.contains(w)), "{e}");
+        assert_eq!(e.line, line_of(&text, needle), "{e}");
+        assert_eq!(e.column, text.lines().nth(e.line - 1).and_then(|l| l.find(needle)).map(|c| c + 1).unwrap_or(0), "{e}");
+    }
+}

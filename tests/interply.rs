@@ -110,6 +110,10 @@ fn ply_penetration(model: &Model, state: &State, parts: &[usize]) -> f64 {
 
 struct Run {
     tip: f64,
+    /// Whether the scene had inter-ply contact.
+    contact: bool,
+    /// Shell nodes of the model.
+    nodes: usize,
     penetration: f64,
     iterations: usize,
     dofs: usize,
@@ -119,23 +123,31 @@ struct Run {
 }
 
 fn solve(stitch_xs: &[f64]) -> Run {
-    let text = cantilever(stitch_xs);
-    let sc = scene::parse("interply.ron", &text).unwrap_or_else(|e| panic!("{e}"));
-    let built = scene::build(&sc, "interply.ron", &text).unwrap_or_else(|e| panic!("{e}"));
+    solve_scene(&cantilever(stitch_xs))
+}
+
+/// Solves a cantilever scene; inter-ply contact where the scene has it (a laminate has
+/// none), penetration between the ply parts where there are ply parts (else 0).
+fn solve_scene(text: &str) -> Run {
+    let sc = scene::parse("interply.ron", text).unwrap_or_else(|e| panic!("{e}"));
+    let built = scene::build(&sc, "interply.ron", text).unwrap_or_else(|e| panic!("{e}"));
     let model = &built.model;
-    let setup = built.interply.as_ref().expect("a multi-ply garment with interply enabled gets inter-ply contact");
     let t = std::time::Instant::now();
     let mut solver = Solver::new(model, sc.solver.clone()).expect("solver");
-    plyshell::contact::interply::attach(&mut solver, model, setup).expect("inter-ply contact attaches");
+    if let Some(setup) = built.interply.as_ref() {
+        plyshell::contact::interply::attach(&mut solver, model, setup).expect("inter-ply contact attaches");
+    }
     let mut state = model.initial_state();
     let mut iterations = 0;
     solver.run(&built.steps, &mut state, &mut |r, _, _| iterations += r.iterations, &mut |_| {}).unwrap_or_else(|e| panic!("{e}"));
     let seconds = t.elapsed().as_secs_f64();
     let tip = model.displacement(&state, built.monitors[0].node).z;
-    let parts: Vec<usize> = ["strip/top", "strip/mid", "strip/bot"].iter().map(|n| model.parts.iter().position(|p| p.name == *n).expect("ply part")).collect();
+    let parts: Vec<usize> = ["strip/top", "strip/mid", "strip/bot"].iter().filter_map(|n| model.parts.iter().position(|p| p.name == *n)).collect();
     Run {
         tip,
-        penetration: ply_penetration(model, &state, &parts),
+        contact: built.interply.is_some(),
+        nodes: model.n_nodes(),
+        penetration: if parts.len() == 3 { ply_penetration(model, &state, &parts) } else { 0.0 },
         iterations,
         dofs: model.dofs.n_free,
         seconds,
@@ -173,6 +185,7 @@ fn stitching_stiffens_plies_that_contact_keeps_apart() {
     // Unbonded: contact alone makes the plies share one deflection line (3 %: friction and
     // the shell's shear and membrane effects), no ply through another (5 % of t).
     let free = solve(&[]);
+    assert!(free.contact, "a multi-ply garment with interply enabled gets inter-ply contact");
     report("unbonded, inter-ply contact", &free, w_unbonded);
     assert!((-free.tip / w_unbonded - 1.0).abs() < 0.03, "unbonded tip {} vs {w_unbonded}", -free.tip);
     assert!(free.penetration < 0.05 * T, "ply penetration {} m", free.penetration);
@@ -295,4 +308,41 @@ fn three_ply_strip_bent_over_a_cylinder_keeps_its_plies_apart() {
     assert!(pen < 0.05 * h_min, "ply penetration {pen} m");
     assert!(body_pen < 0.05, "cylinder penetration {body_pen} of h");
     assert!((lift / weight - 1.0).abs() < 0.02, "reaction {lift} vs weight {weight}");
+}
+
+/// Issue 18 (ply fidelity) must-show: the same strip with `ply_model: Laminate` — one shell
+/// whose section stacks the three plies (classical lamination theory, `material::Laminate`)
+/// on the stack's mid-surface, loaded by the same three Gravity loads on the plies' names
+/// (aliases of the laminated part) — matches the fully bonded transformed section
+/// (Timoshenko & Gere: w = q L⁴/(8 EI), EI = 5.45 × Σ E_i I_i) within 1 %, and the discrete
+/// plies stitched at every node column (with inter-ply contact) within 1 %.
+#[test]
+fn laminate_of_three_bonded_plies_matches_the_stitched_cantilever() {
+    let i1 = B * T.powi(3) / 12.0;
+    let q = 3.0 * RHO * G * B;
+    let z = [T, 0.0, -T];
+    let zbar = E.iter().zip(&z).map(|(e, z)| e * z).sum::<f64>() / E.iter().sum::<f64>();
+    let composite: f64 = E.iter().zip(&z).map(|(e, z)| e * (i1 + B * T * (z - zbar).powi(2))).sum();
+    let w_bonded = q * L.powi(4) / (8.0 * composite);
+    let text = cantilever(&[]).replace(r#"plies: ["top", "mid", "bot"])"#, r#"plies: ["top", "mid", "bot"], ply_model: Some(Laminate))"#);
+    assert!(text.contains("Laminate"));
+    let lam = solve_scene(&text);
+    let all: Vec<f64> = (1..=20).map(|i| i as f64 * H).collect();
+    let stitched = solve(&all);
+    for (name, r) in [("laminate", &lam), ("discrete, stitched at every node column", &stitched)] {
+        println!(
+            "{name}: tip {:.5e} m vs transformed section {w_bonded:.5e} ({:+.2} %); {} nodes, {} free DOFs after ties, {} Newton iterations, {:.2} s",
+            -r.tip,
+            100.0 * (-r.tip / w_bonded - 1.0),
+            r.nodes,
+            r.dofs,
+            r.iterations,
+            r.seconds
+        );
+    }
+    println!("laminate vs stitched discrete: {:+.4} %", 100.0 * (lam.tip / stitched.tip - 1.0));
+    assert!((-lam.tip / w_bonded - 1.0).abs() < 0.01, "laminate tip {} vs {w_bonded}", -lam.tip);
+    assert!((lam.tip / stitched.tip - 1.0).abs() < 0.01, "laminate tip {} vs stitched {}", lam.tip, stitched.tip);
+    assert!(!lam.contact, "no inter-ply contact within a laminate");
+    assert_eq!(3 * lam.nodes, stitched.nodes, "one shell instead of three");
 }

@@ -20,8 +20,9 @@ use super::membrane::{MembraneTying, TyingWeights, MAX_MPAIRS};
 use super::quadrature::gauss_legendre;
 use super::shell4::{ElementFailure, Section, ShearTreatment, ShellElement};
 
-/// Largest number of distinct base-vector forms of a rule (5 thickness levels of MITC4 need
-/// 54, MITC4+ at most 10 more mid-surface forms) and of distinct pair strains of one
+/// Largest number of distinct base-vector forms of a rule kept in the kernel's stack
+/// scratch (5 thickness levels of MITC4 need 54, MITC4+ at most 10 more mid-surface forms;
+/// laminate rules with more levels use heap scratch) and of distinct pair strains of one
 /// thickness level (MITC4: 15).
 pub(super) const MAX_FORMS: usize = 64 + 8;
 /// See [`MAX_FORMS`].
@@ -153,10 +154,18 @@ fn centre_shear(shear: ShearTreatment) -> bool {
 impl SectionRule {
     /// Builds the rule of `section`.
     pub fn new(section: &Section) -> Result<Self, ElementFailure> {
-        let (pz, wz) = gauss_legendre(section.thickness_points).ok_or(ElementFailure::ThicknessRule(section.thickness_points))?;
+        // The material's own thickness rule (a laminate's plies, each in its band), else
+        // Gauss–Legendre with the section's number of points.
+        let through: Vec<[f64; 2]> = match section.material.thickness_rule() {
+            Some(r) => r,
+            None => {
+                let (pz, wz) = gauss_legendre(section.thickness_points).ok_or(ElementFailure::ThicknessRule(section.thickness_points))?;
+                pz.iter().zip(wz).map(|(&z, &w)| [z, w]).collect()
+            }
+        };
         let (p2, _) = gauss_legendre(2).ok_or(ElementFailure::ThicknessRule(2))?;
         let mut t = Tables { forms: Vec::new(), pairs: Vec::new() };
-        let mut levels = Vec::with_capacity(pz.len());
+        let mut levels = Vec::with_capacity(through.len());
         let (h, shear) = (section.thickness, section.shear);
         let mut plane = Vec::with_capacity(5);
         for &eta in p2 {
@@ -164,7 +173,7 @@ impl SectionRule {
                 plane.push((xi, eta));
             }
         }
-        for (&z, &w) in pz.iter().zip(wz) {
+        for &[z, w] in &through {
             let points = plane.iter().map(|&(xi, eta)| t.point(xi, eta, z, w, h, shear)).collect();
             let centre = t.point(0.0, 0.0, z, 1.0, h, shear);
             levels.push(t.level(z, points, centre));
@@ -183,12 +192,12 @@ impl SectionRule {
         Self { forms: t.forms, levels: vec![level], membrane, centre_shear: centre_shear(shear) }
     }
 
-    /// Whether the rule fits the element kernel's fixed-size scratch: at most [`MAX_FORMS`]
-    /// forms, per level at most [`MAX_PAIRS`] pairs and 4 points, and at most [`MAX_MPAIRS`]
-    /// membrane pairs (always true for the 1–5-point thickness rules).
+    /// Whether the rule fits the element kernel's fixed-size scratch: per level at most
+    /// [`MAX_PAIRS`] pairs and 4 points, and at most [`MAX_MPAIRS`] membrane pairs (always
+    /// true). Rules with more than [`MAX_FORMS`] forms (laminates of many plies) are
+    /// evaluated with heap scratch.
     pub(super) fn fits(&self) -> bool {
-        self.forms.len() <= MAX_FORMS
-            && self.levels.iter().all(|l| l.pairs.len() <= MAX_PAIRS && l.points.len() <= 4)
+        self.levels.iter().all(|l| l.pairs.len() <= MAX_PAIRS && l.points.len() <= 4)
             && self.membrane.as_ref().is_none_or(|m| m.pairs.len() <= MAX_MPAIRS && m.points.len() <= 5)
     }
 }

@@ -335,13 +335,21 @@ impl<'a> ShellElement<'a> {
         let material = &*self.section.material;
         let with_tangent = k.is_some();
         // Changes Δp of the rule's forms.
-        let mut df = [Vector3::zeros(); MAX_FORMS];
+        // (Stack scratch, or heap scratch for the long rules of many-ply laminates.)
+        let mut df_stack = [Vector3::zeros(); MAX_FORMS];
+        let mut df_heap = Vec::new();
+        let df: &mut [Vector3<f64>] = if rule.forms.len() <= MAX_FORMS {
+            &mut df_stack
+        } else {
+            df_heap.resize(rule.forms.len(), Vector3::zeros());
+            &mut df_heap
+        };
         for (d, f) in df.iter_mut().zip(rule.forms.iter()) {
             *d = f.eval(&kin.dv);
         }
         // MITC4+: the membrane pairs, evaluated once for all levels.
         let tying = rule.membrane.as_ref();
-        let mut mstate = tying.map(|m| MembraneState::new(m, &geom.tying, &rule.forms, &geom.forms, &df, &kin, with_tangent));
+        let mut mstate = tying.map(|m| MembraneState::new(m, &geom.tying, &rule.forms, &geom.forms, df, &kin, with_tangent));
         let mut upper: Upper = [[0.0; ELEMENT_DOFS]; ELEMENT_DOFS];
         let mut energy = 0.0;
         // Generalised forces on the kinematic vectors and the second-derivative matrix
@@ -550,15 +558,16 @@ impl<'a> ShellElement<'a> {
 mod tests {
     use super::*;
     use crate::element::kinematics::arc_factor;
-    use crate::material::{Fabric, FabricProperties, NeoHookean, StVenantKirchhoff};
+    use crate::material::{Fabric, FabricProperties, LaminaPly, Laminate, NeoHookean, StVenantKirchhoff};
     use nalgebra::{Rotation3, Unit};
 
     fn section(shear: ShearTreatment, nh: bool) -> Section {
         section_of(shear, if nh { "neo-Hookean" } else { "SVK" })
     }
 
-    /// A section of thickness 0.05 of the named lamina: "SVK", "neo-Hookean" or "fabric"
-    /// (the cotton broadcloth preset at that thickness, three thickness points).
+    /// A section of thickness 0.05 of the named lamina: "SVK", "neo-Hookean", "fabric"
+    /// (the cotton broadcloth preset at that thickness, three thickness points) or
+    /// "laminate" (a nonsymmetric stack of those three, 0.02 + 0.01 + 0.02).
     fn section_of(shear: ShearTreatment, material: &str) -> Section {
         let (material, thickness_points): (Arc<dyn ShellMaterial>, usize) = match material {
             "neo-Hookean" => (Arc::new(NeoHookean::new(1.0e4 / 3.0, 1.0e4 / 2.6)), 2),
@@ -566,6 +575,17 @@ mod tests {
                 let mut p = FabricProperties::preset("cotton_broadcloth").expect("preset");
                 p.thickness = 0.05;
                 (Arc::new(Fabric::new(p)), 3)
+            }
+            "laminate" => {
+                let mut p = FabricProperties::preset("cotton_broadcloth").expect("preset");
+                p.thickness = 0.02;
+                let ply = |name: &str, material: Arc<dyn ShellMaterial>, thickness: f64| LaminaPly { name: name.into(), material, thickness, areal_density: None };
+                let plies = vec![
+                    ply("SVK", section_of(shear, "SVK").material, 0.02),
+                    ply("neo-Hookean", section_of(shear, "neo-Hookean").material, 0.01),
+                    ply("fabric", Arc::new(Fabric::new(p)), 0.02),
+                ];
+                (Arc::new(Laminate::new(plies).expect("laminate")), 2)
             }
             _ => (Arc::new(StVenantKirchhoff::new(1.0e4, 0.3, 5.0 / 6.0)), 2),
         };
@@ -682,8 +702,12 @@ mod tests {
     fn tangent_matches_central_differences_of_residual() {
         let (x0, d0) = geometry();
         for shear in [ShearTreatment::Mitc4, ShearTreatment::Sri, ShearTreatment::Mitc4Plus, ShearTreatment::Mitc4PlusCentre] {
-            for material in ["SVK", "neo-Hookean", "fabric"] {
+            for material in ["SVK", "neo-Hookean", "fabric", "laminate"] {
                 let sec = section_of(shear, material);
+                if material == "laminate" && shear == ShearTreatment::Mitc4 {
+                    let n = SectionRule::new(&sec).unwrap().forms.len();
+                    assert!(n > MAX_FORMS, "the laminate's {n} forms take the kernel's heap scratch");
+                }
                 let el = ShellElement { x0, d0, grain: None, section: &sec };
                 // A strongly deformed state: stretch, shear, large rotation of the directors.
                 let mut u = ElemVec::zeros();

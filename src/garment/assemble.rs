@@ -17,18 +17,21 @@ use crate::mesh::ShellMesh;
 use crate::model::{Load, Tie};
 use crate::scene::{Locator, SceneError};
 
-/// One ply of one panel as a shell part.
+/// One ply of one panel, or a laminated panel, as a shell part.
 #[derive(Clone, Debug)]
 pub struct GarmentPart {
-    /// Part name: the panel name, or `panel/ply` for multi-ply panels.
+    /// Part name: the panel name, or `panel/ply` for the plies of discrete multi-ply panels.
     pub name: String,
     /// Panel index.
     pub panel: usize,
-    /// Ply position in the panel's stack (0 = outermost).
+    /// Ply position in the panel's stack (0 = outermost; a laminate's is 0).
     pub ply: usize,
-    /// Material name.
+    /// Stack positions of the plies the part stands for: `[ply]`, or all of a laminated
+    /// panel's (see `garment::laminate`).
+    pub plies: Vec<usize>,
+    /// Material name (empty for a laminate: its plies have theirs).
     pub material: String,
-    /// Thickness.
+    /// Thickness (a laminate's: the sum of its plies').
     pub thickness: f64,
     /// Mass per area (0: unset).
     pub areal_density: f64,
@@ -118,6 +121,7 @@ impl GarmentMesh {
     /// on the director side).
     pub fn build(spec: &GarmentSpec, loc: &Locator, materials: &BTreeSet<String>) -> Result<Self, SceneError> {
         let graph = GarmentGraph::validate(spec, loc, materials)?;
+        super::laminate::check(spec, loc)?;
         let h = spec.element_size;
         let mut parts = Vec::new();
         let mut patterns = Vec::new();
@@ -151,10 +155,22 @@ impl GarmentMesh {
             for name in p.edges.keys() {
                 edges.insert(name.clone(), span_row(&pattern, &ranges, p, &SpanRef { panel: p.name.clone(), edge: name.clone(), reversed: false }));
             }
+            // Discrete: each ply offset by its place in the stack; laminate: one shell on the
+            // stack's mid-surface.
             let mut below = 0.0;
-            for (k, ply) in p.plies.iter().enumerate() {
-                let z = 0.5 * total - below - 0.5 * thick[k];
-                below += thick[k];
+            let layers: Vec<(usize, f64)> = p
+                .plies
+                .iter()
+                .enumerate()
+                .map(|(k, _)| {
+                    below += thick[k];
+                    (k, 0.5 * total - below + 0.5 * thick[k])
+                })
+                .collect();
+            let laminate = spec.is_laminate(p);
+            let layers = if laminate { vec![(0, 0.0)] } else { layers };
+            for (k, z) in layers {
+                let ply = &p.plies[k];
                 let mesh = ShellMesh {
                     nodes: mid.iter().zip(&dirs).map(|(x, d)| x + d * z).collect(),
                     directors: dirs.clone(),
@@ -162,10 +178,15 @@ impl GarmentMesh {
                     edges: edges.clone(),
                 };
                 mesh.validate().map_err(|e| loc.at(Some(&p.name), Some("outline"), format!("{field}.outline"), format!("panel \"{}\": {e}", p.name)))?;
-                let name = if p.plies.len() == 1 { p.name.clone() } else { format!("{}/{ply}", p.name) };
-                let material = spec.plies.get(ply).map(|x| x.material.clone()).unwrap_or_default();
-                let areal_density = spec.plies.get(ply).map_or(0.0, |x| x.areal_density);
-                parts.push(GarmentPart { name, panel: pi, ply: k, material, thickness: thick[k], areal_density, mesh, grains: grains.clone() });
+                let part = if laminate {
+                    GarmentPart { name: p.name.clone(), panel: pi, ply: 0, plies: (0..p.plies.len()).collect(), material: String::new(), thickness: total, areal_density: 0.0, mesh, grains: grains.clone() }
+                } else {
+                    let name = if p.plies.len() == 1 { p.name.clone() } else { super::laminate::alias(&p.name, ply) };
+                    let material = spec.plies.get(ply).map(|x| x.material.clone()).unwrap_or_default();
+                    let areal_density = spec.plies.get(ply).map_or(0.0, |x| x.areal_density);
+                    GarmentPart { name, panel: pi, ply: k, plies: vec![k], material, thickness: thick[k], areal_density, mesh, grains: grains.clone() }
+                };
+                parts.push(part);
             }
             patterns.push(pattern);
             sample_ranges.push(ranges);
@@ -176,6 +197,11 @@ impl GarmentMesh {
     /// Global part index of (panel, ply), given the index of the first garment part.
     fn part_of(&self, panel: usize, ply: usize) -> Option<usize> {
         self.parts.iter().position(|p| p.panel == panel && p.ply == ply)
+    }
+
+    /// Number of shell parts of a panel: its plies, or 1 when laminated.
+    fn n_parts(&self, panel: usize) -> usize {
+        self.parts.iter().filter(|p| p.panel == panel).count()
     }
 
     /// Seam and stitch-line ties. `first_node[k]` is the first global node of garment part k.
@@ -216,8 +242,7 @@ impl GarmentMesh {
             let row_a = span_row(&self.patterns[pa], &self.sample_ranges[pa], &spec.panels[pa], &s.a);
             let row_b = span_row(&self.patterns[pb], &self.sample_ranges[pb], &spec.panels[pb], &s.b);
             let global = |part: usize, row: &[usize]| -> Vec<usize> { row.iter().map(|n| n + first_node[part]).collect() };
-            let na = spec.panels[pa].plies.len();
-            let nb = spec.panels[pb].plies.len();
+            let (na, nb) = (self.n_parts(pa), self.n_parts(pb));
             let master_part = self.part_of(pa, 0).ok_or_else(|| err("panel without plies".into()))?;
             let master = global(master_part, &row_a);
             for k in 1..na {
@@ -243,7 +268,7 @@ impl GarmentMesh {
                 return Err(loc.at(Some(&l.name), Some("points"), format!("garment.stitch_lines[{}].points", l.name), format!("stitch line \"{}\" passes no mesh node of panel \"{}\"", l.name, l.panel)));
             }
             let Some(p0) = self.part_of(pi, 0) else { continue };
-            for k in 1..spec.panels[pi].plies.len() {
+            for k in 1..self.n_parts(pi) {
                 let Some(pk) = self.part_of(pi, k) else { continue };
                 for &n in &near {
                     ties.extend(rigid_link(first_node[p0] + n, first_node[pk] + n, x0, frames0));
@@ -268,11 +293,14 @@ impl GarmentMesh {
         materials.sort();
         materials.dedup();
         let mut part_tags = vec![[-1; 3]; first_part];
+        let mut part_plies = vec![Vec::new(); first_part];
         for gp in &self.parts {
-            let ply_name = &spec.panels[gp.panel].plies[gp.ply];
-            let ply = plies.iter().position(|p| p == ply_name).map_or(-1, |i| i as i32);
+            let ids: Vec<i32> = gp.plies.iter().map(|&k| plies.iter().position(|p| *p == spec.panels[gp.panel].plies[k]).map_or(-1, |i| i as i32)).collect();
+            // A laminate stands for several plies and materials: −1, its plies in `part_plies`.
+            let ply = if ids.len() == 1 { ids[0] } else { -1 };
             let mat = materials.iter().position(|m| *m == gp.material).map_or(-1, |i| i as i32);
             part_tags.push([gp.panel as i32, ply, mat]);
+            part_plies.push(ids);
         }
         let extent = |pat: &PatternMesh| {
             let (lo, hi) = pat.uv.iter().fold(([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]), |(lo, hi), p| ([lo[0].min(p[0]), lo[1].min(p[1])], [hi[0].max(p[0]), hi[1].max(p[1])]));
@@ -299,7 +327,7 @@ impl GarmentMesh {
                 }
             }
         }
-        super::export::GarmentLayout { panels: spec.panels.iter().map(|p| p.name.clone()).collect(), plies, ply_thickness, materials, part_tags, flat, pattern_uv }
+        super::export::GarmentLayout { panels: spec.panels.iter().map(|p| p.name.clone()).collect(), plies, ply_thickness, materials, part_tags, part_plies, flat, pattern_uv }
     }
 
     /// Warnings for seams that look sewn crossed: with each side's row as given (`reversed`),

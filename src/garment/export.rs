@@ -22,8 +22,12 @@ pub struct GarmentLayout {
     pub ply_thickness: Vec<f64>,
     /// Material names (id = index).
     pub materials: Vec<String>,
-    /// (panel, ply, material) ids of each model part; −1 for parts outside the garment.
+    /// (panel, ply, material) ids of each model part; −1 for parts outside the garment, and
+    /// ply and material −1 for a laminated panel (it stands for several).
     pub part_tags: Vec<[i32; 3]>,
+    /// Ply ids each model part stands for: one for a ply, the whole stack (innermost last)
+    /// for a laminated panel, none outside the garment.
+    pub part_plies: Vec<Vec<i32>>,
     /// Flat-pattern position of each model node laid out for export (panels side by side,
     /// plies stacked below), or None for nodes outside the garment.
     pub flat: Vec<Option<[f64; 3]>>,
@@ -46,7 +50,14 @@ pub fn garment_surface(model: &Model, layout: &GarmentLayout, position: impl Fn(
     let mut tagged: Vec<((i32, i32), String, Vec<[usize; 4]>)> = Vec::new();
     for (pi, part) in model.parts.iter().enumerate() {
         let Some(&[panel, ply, _]) = layout.part_tags.get(pi) else { continue };
-        let (Some(panel_name), Some(ply_name)) = (layout.panels.get(panel as usize).filter(|_| panel >= 0), layout.plies.get(ply as usize).filter(|_| ply >= 0)) else { continue };
+        let Some(panel_name) = layout.panels.get(panel as usize).filter(|_| panel >= 0) else { continue };
+        // A laminate's group names its plies, `panel/outer+carbon+liner`.
+        let ids = layout.part_plies.get(pi).map_or(&[][..], |v| v.as_slice());
+        let names: Vec<&str> = ids.iter().filter_map(|&i| layout.plies.get(i as usize).filter(|_| i >= 0)).map(|s| s.as_str()).collect();
+        if names.is_empty() {
+            continue;
+        }
+        let ply_name = names.join("+");
         let quads: Vec<[usize; 4]> = model.elements[part.first_element..part.first_element + part.n_elements]
             .iter()
             .map(|e| e.nodes.map(|n| vertex[n]))
@@ -69,7 +80,9 @@ pub fn garment_surface(model: &Model, layout: &GarmentLayout, position: impl Fn(
 /// carry `seam_force_per_length` from the all-DOF internal and external forces `forces`;
 /// without, the flat pattern layout is written (seams as lines between the flat spans,
 /// forces zero). Cell data: `panel`, `ply`, `material`, `part`, `seam` (−1 where it does
-/// not apply) and the force per unit length (quads: zero). Field data (with a layout): by ply
+/// not apply; ply and material −1 on a laminated panel), `ply_mask` (bit i: the cell stands
+/// for ply id i — one bit per ply, all its plies' bits on a laminate) and the force per unit
+/// length (quads: zero). Field data (with a layout): by ply
 /// id, `ply_names` (UTF-8, each name ended by a NUL byte) and `ply_thickness` (m); likewise
 /// `panel_names` and `material_names`.
 pub fn write_garment_vtu(
@@ -106,6 +119,9 @@ pub fn write_garment_vtu(
     let n_q = quads.len();
     let int = |k: usize| -> Vec<i32> { (0..n_q).map(|e| tag(e, k)).chain(std::iter::repeat_n(-1, lines.len())).collect() };
     let part: Vec<i32> = model.elements.iter().map(|e| e.part as i32).chain(std::iter::repeat_n(-1, lines.len())).collect();
+    // Bit i set: the cell stands for ply id i (a laminate sets several).
+    let mask_of = |p: usize| -> i32 { layout.and_then(|l| l.part_plies.get(p)).map_or(0, |ids| ids.iter().filter(|&&i| (0..31).contains(&i)).fold(0, |m, &i| m | (1 << i))) };
+    let ply_mask: Vec<i32> = model.elements.iter().map(|e| mask_of(e.part)).chain(std::iter::repeat_n(0, lines.len())).collect();
     let seam: Vec<i32> = std::iter::repeat_n(-1, n_q).chain(seam_id).collect();
     let force: Vec<f64> = std::iter::repeat_n(0.0, 3 * n_q).chain(line_force.iter().flat_map(|f| [f.x, f.y, f.z])).collect();
     let displacement: Vec<f64> = (0..model.n_nodes())
@@ -120,7 +136,7 @@ pub fn write_garment_vtu(
         lines: &lines,
         point_data: vec![DataArray { name: "displacement", components: 3, values: &displacement }],
         cell_data: vec![DataArray { name: "seam_force_per_length", components: 3, values: &force }],
-        int_cell_data: vec![("panel", int(0)), ("ply", int(1)), ("material", int(2)), ("part", part), ("seam", seam)],
+        int_cell_data: vec![("panel", int(0)), ("ply", int(1)), ("material", int(2)), ("part", part), ("seam", seam), ("ply_mask", ply_mask)],
         field_data: layout.map_or_else(Vec::new, |l| {
             vec![
                 ("ply_names", FieldValues::names(&l.plies)),

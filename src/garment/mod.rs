@@ -3,6 +3,7 @@
 pub mod assemble;
 pub mod export;
 pub mod graph;
+pub mod laminate;
 pub mod mesh;
 pub mod place;
 pub mod seam;

@@ -37,6 +37,25 @@ pub struct GarmentSpec {
     /// `Mitc4Plus`) for assumed membrane strains on curved, distorted panel meshes, `Sri`).
     #[serde(default)]
     pub shear: crate::element::ShearTreatment,
+    /// How the plies of multi-ply panels are modelled unless a panel says otherwise
+    /// (default `Discrete`: one shell per ply).
+    #[serde(default)]
+    pub ply_model: PlyModel,
+}
+
+/// Ply fidelity of a multi-ply panel (see `garment::laminate`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub enum PlyModel {
+    /// One shell per ply, offset through the stack, joined by seams and stitch lines (and
+    /// inter-ply contact when enabled).
+    #[default]
+    Discrete,
+    /// One shell per panel whose section stacks the bonded plies (classical lamination
+    /// theory); no stitch lines or inter-ply contact within it.
+    Laminate,
+    /// Laminate where the plies move as one, discrete plies where they would slide or
+    /// separate (not implemented yet).
+    Auto,
 }
 
 /// A pattern file (see `crate::pattern`).
@@ -103,6 +122,14 @@ impl GarmentSpec {
         let unused: Vec<String> = self.plies.keys().filter(|k| !order.contains(k)).cloned().collect();
         order.extend(unused);
         order
+    }
+}
+
+impl GarmentSpec {
+    /// Whether `panel` is one laminated shell: `Laminate` by its own or the garment's
+    /// `ply_model`, and more than one ply (a single ply is the same either way).
+    pub fn is_laminate(&self, panel: &PanelSpec) -> bool {
+        panel.plies.len() > 1 && panel.ply_model.unwrap_or(self.ply_model) == PlyModel::Laminate
     }
 }
 
@@ -195,6 +222,9 @@ pub struct PanelSpec {
     /// Initial placement in 3D.
     #[serde(default)]
     pub placement: Placement,
+    /// Ply fidelity of this panel (None: the garment's `ply_model`).
+    #[serde(default)]
+    pub ply_model: Option<PlyModel>,
 }
 
 fn warp_along_v() -> [f64; 2] {

@@ -59,6 +59,10 @@ impl ShellMaterial for Scaled {
         self.base.thickness_points()
     }
 
+    fn thickness_rule(&self) -> Option<Vec<[f64; 2]>> {
+        self.base.thickness_rule()
+    }
+
     fn intrinsic_thickness(&self) -> Option<f64> {
         self.base.intrinsic_thickness()
     }

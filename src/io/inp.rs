@@ -181,7 +181,7 @@ pub fn inp_string(deck: &InpDeck) -> Result<(String, InpReport), String> {
         let isotropic = young * h.powi(3) / (12.0 * (1.0 - poisson * poisson));
         if (section.material.bending_rigidity(h) - isotropic).abs() > 1e-9 * isotropic {
             report.materials_approximated += 1;
-            let _ = writeln!(t, "** (a fabric: written as its small-strain isotropic stand-in E, nu)");
+            let _ = writeln!(t, "** (a fabric or laminate: written as its small-strain isotropic stand-in E, nu)");
         }
         let _ = writeln!(t, "*SHELL SECTION, ELSET={set}, MATERIAL={mat}\n{}", num(section.thickness));
     }

@@ -7,10 +7,12 @@
 //! The plane-stress condition S33 = 0 is the model's business: the element never sees E33.
 
 mod fabric;
+mod laminate;
 mod neo_hookean;
 mod svk;
 
 pub use fabric::{twist_default, Fabric, FabricProperties, FABRIC_PRESETS, SPLIT_LIMIT};
+pub use laminate::{Abd, LaminaPly, Laminate};
 pub use neo_hookean::NeoHookean;
 pub use svk::StVenantKirchhoff;
 
@@ -83,6 +85,12 @@ pub trait ShellMaterial: Send + Sync + std::fmt::Debug {
     }
     /// Thickness Gauss points the material needs (None: the section's choice).
     fn thickness_points(&self) -> Option<usize> {
+        None
+    }
+    /// The section's whole thickness rule as (ζ, weight) pairs, weights summing to 2, when
+    /// the material defines it (a laminate: each ply's Gauss rule in its own band); it
+    /// replaces the Gauss rule of `thickness_points`.
+    fn thickness_rule(&self) -> Option<Vec<[f64; 2]>> {
         None
     }
     /// Thickness the material's sheet constants refer to, if it has one (fabric).

@@ -114,6 +114,13 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
         materials.insert(name.as_str(), m);
     }
 
+    // The areal density of the first Gravity load on a part (by name).
+    let gravity_density = |name: &str| {
+        scene.loads.values().find_map(|l| match l {
+            LoadSpec::Gravity { part, areal_density, .. } if part == name => Some(*areal_density),
+            _ => None,
+        })
+    };
     // Parts and meshes.
     if scene.parts.is_empty() && scene.garment.is_none() {
         return Err(loc.at(None, Some("parts"), "parts", "expected at least one part"));
@@ -192,16 +199,12 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
         }
         x0.extend_from_slice(&m.nodes);
         d0.extend_from_slice(&m.directors);
-        let gravity_density = scene.loads.values().find_map(|l| match l {
-            LoadSpec::Gravity { part, areal_density, .. } if *part == p.name => Some(*areal_density),
-            _ => None,
-        });
         if !(p.areal_density.is_finite() && p.areal_density >= 0.0) {
             return Err(loc.at(Some(&p.name), Some("areal_density"), format!("{field}.areal_density"), "expected a non-negative mass per area"));
         }
         // Else the material's own (a fabric's areal density).
         let material_density = sections.last().and_then(|s| s.material.areal_density());
-        let areal_density = if p.areal_density > 0.0 { p.areal_density } else { gravity_density.or(material_density).unwrap_or(0.0) };
+        let areal_density = if p.areal_density > 0.0 { p.areal_density } else { gravity_density(&p.name).or(material_density).unwrap_or(0.0) };
         parts.push(PartInfo { name: p.name.clone(), first_node, n_nodes: m.nodes.len(), first_element, n_elements: m.quads.len(), areal_density });
         meshes.push(m);
     }
@@ -245,9 +248,17 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
     };
     let mut garment_first_node = Vec::new();
     let garment_first_part = parts.len();
+    // The `panel/ply` names of laminated plies → (laminated part, ply name).
+    let mut ply_aliases = BTreeMap::new();
     if let Some((g, gm)) = &garment {
+        ply_aliases = crate::garment::laminate::aliases(g, &gm.parts, garment_first_part);
         for gp in &gm.parts {
-            let material = materials.get(gp.material.as_str()).cloned().ok_or_else(|| loc.at_value(&gp.name, &gp.material, "garment.plies", "unknown material"))?;
+            let material: Arc<dyn ShellMaterial> = if gp.plies.len() > 1 {
+                let field = format!("garment.panels[{}].plies", g.panels[gp.panel].name);
+                Arc::new(crate::garment::laminate::section_material(g, gp, &materials, &gravity_density).map_err(|m| loc.at(Some(&g.panels[gp.panel].name), Some("plies"), field, m))?)
+            } else {
+                materials.get(gp.material.as_str()).cloned().ok_or_else(|| loc.at_value(&gp.name, &gp.material, "garment.plies", "unknown material"))?
+            };
             let (first_node, first_element) = (x0.len(), elements.len());
             // The material's own rule (a fabric's split of membrane and bending stiffness needs
             // its thickness points; with two, any fabric bent as A h²/12 whatever its B).
@@ -259,12 +270,8 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
             x0.extend_from_slice(&gp.mesh.nodes);
             d0.extend_from_slice(&gp.mesh.directors);
             quality.push((gp.name.clone(), gp.mesh.quality()));
-            let gravity_density = scene.loads.values().find_map(|l| match l {
-                LoadSpec::Gravity { part, areal_density, .. } if *part == gp.name => Some(*areal_density),
-                _ => None,
-            });
             let material_density = sections.last().and_then(|s| s.material.areal_density());
-            let areal_density = if gp.areal_density > 0.0 { gp.areal_density } else { gravity_density.or(material_density).unwrap_or(0.0) };
+            let areal_density = if gp.areal_density > 0.0 { gp.areal_density } else { gravity_density(&gp.name).or(material_density).unwrap_or(0.0) };
             parts.push(PartInfo { name: gp.name.clone(), first_node, n_nodes: gp.mesh.nodes.len(), first_element, n_elements: gp.mesh.quads.len(), areal_density });
             garment_first_node.push(first_node);
             meshes.push(gp.mesh.clone());
@@ -273,7 +280,7 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
     let n_nodes = x0.len();
     // The exact sizes (OBJ meshes and focused rings are known only now).
     crate::budget::check_model(n_nodes as u64, elements.len() as u64).map_err(|m| loc.at(None, Some("parts"), "parts", m))?;
-    let part_index = |name: &str| parts.iter().position(|p: &PartInfo| p.name == name);
+    let part_index = |name: &str| parts.iter().position(|p: &PartInfo| p.name == name).or_else(|| ply_aliases.get(name).map(|a| a.0));
 
     // Node sets.
     let mut node_sets: BTreeMap<String, Vec<usize>> = BTreeMap::new();
@@ -466,7 +473,9 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
             }
             LoadSpec::SelfWeight { part, g } => {
                 let k = part_of(part)?;
-                let Some(rho) = sections[k].material.areal_density() else {
+                // A laminated ply's alias weighs as the ply's own material.
+                let ply_material = ply_aliases.get(part.as_str()).and_then(|(_, ply)| garment.as_ref()?.0.plies.get(ply)).and_then(|p| materials.get(p.material.as_str()));
+                let Some(rho) = ply_material.unwrap_or(&sections[k].material).areal_density() else {
                     return Err(loc.at(Some(name), Some("part"), format!("{field}.part"), "the part's material has no areal density (use Gravity with areal_density)"));
                 };
                 let w = v3(*g) * rho;
