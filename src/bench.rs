@@ -436,6 +436,28 @@ fn record(benchmark: &str, mesh: String, s: &Summary, wall_s: f64, value: f64, r
     Record { benchmark: benchmark.into(), mesh, dofs: s.sizes.dofs, newton_iterations: s.newton_iterations, wall_s, value, reference, rel_error }
 }
 
+/// One plot series per distinct `key` of `recs` (in order of first appearance), of the
+/// points `point` gives.
+pub(crate) fn series_by<T>(recs: &[T], key: impl Fn(&T) -> &str, point: impl Fn(&T) -> Option<(f64, f64)>) -> Vec<Series> {
+    let mut names: Vec<&str> = recs.iter().map(&key).collect();
+    names.dedup();
+    names
+        .iter()
+        .map(|n| Series { name: n.to_string(), points: recs.iter().filter(|r| key(r) == *n).filter_map(&point).collect(), reference: false })
+        .filter(|s| !s.points.is_empty())
+        .collect()
+}
+
+/// Writes `recs` as JSON to `json` (whole or not at all) and `series` as a log–log SVG
+/// beside it, titled (title, x label, y label); returns the SVG's path.
+pub(crate) fn write_records<T: Serialize>(json: &Path, recs: &[T], series: &[Series], (title, x, y): (&str, &str, &str)) -> Result<std::path::PathBuf, String> {
+    let json_text = serde_json::to_vec_pretty(recs).map_err(|e| e.to_string())?;
+    crate::io::atomic::write_atomic(json, &json_text).map_err(|e| format!("{}: {e}", json.display()))?;
+    let svg = json.with_extension("svg");
+    plot_xy(&svg, title, x, y, series, true, true).map_err(|e| format!("{}: {e}", svg.display()))?;
+    Ok(svg)
+}
+
 /// Runs every benchmark at three or more meshes, prints the table, writes JSON and an
 /// error-versus-time SVG beside it.
 pub fn run_all(json: &Path, quick: bool) -> Result<(), String> {
@@ -539,23 +561,9 @@ pub fn run_all(json: &Path, quick: bool) -> Result<(), String> {
             }
         }
     }
-    let json_text = serde_json::to_vec_pretty(&recs).map_err(|e| e.to_string())?;
-    crate::io::atomic::write_atomic(json, &json_text).map_err(|e| format!("{}: {e}", json.display()))?;
     // Error against time, one series per benchmark.
-    let mut names: Vec<&str> = recs.iter().map(|r| r.benchmark.as_str()).collect();
-    names.dedup();
-    let series: Vec<Series> = names
-        .iter()
-        .map(|n| Series {
-            name: n.to_string(),
-            points: recs.iter().filter(|r| r.benchmark == *n && r.rel_error > 0.0).map(|r| (r.wall_s.max(1e-4), r.rel_error)).collect(),
-            reference: false,
-        })
-        .filter(|s| !s.points.is_empty())
-        .collect();
-    let svg = json.with_extension("svg");
-    plot_xy(&svg, "plyshell benchmarks: error against wall time", "wall time (s)", "relative error", &series, true, true)
-        .map_err(|e| format!("{}: {e}", svg.display()))?;
+    let series = series_by(&recs, |r| &r.benchmark, |r| (r.rel_error > 0.0).then_some((r.wall_s.max(1e-4), r.rel_error)));
+    let svg = write_records(json, &recs, &series, ("plyshell benchmarks: error against wall time", "wall time (s)", "relative error"))?;
     println!("records in {}, plot in {}", json.display(), svg.display());
     Ok(())
 }

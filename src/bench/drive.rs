@@ -19,8 +19,7 @@ use std::time::Instant;
 
 use serde::Serialize;
 
-use super::solve_variant;
-use crate::io::plot::{Series, plot_xy};
+use super::{series_by, solve_variant, write_records};
 
 /// Sheet-onto-sphere scene; `{N}`, `{MATERIAL}`, `{SECTION}` and `{LOAD}` are substituted.
 const SHEET_ON_SPHERE: &str = r#"Scene(
@@ -249,35 +248,8 @@ pub fn run_drive(json: &Path, quick: bool) -> Result<(), String> {
         print(&r);
         recs.push(r);
     }
-    let json_text = serde_json::to_vec_pretty(&recs).map_err(|e| e.to_string())?;
-    crate::io::atomic::write_atomic(json, &json_text)
-        .map_err(|e| format!("{}: {e}", json.display()))?;
-    let mut names: Vec<&str> = recs.iter().map(|r| r.case.as_str()).collect();
-    names.dedup();
-    let series: Vec<Series> = names
-        .iter()
-        .map(|c| Series {
-            name: c.to_string(),
-            points: recs
-                .iter()
-                .filter(|r| r.case == *c && r.dofs > 0 && r.wall_s > 0.0)
-                .map(|r| (r.dofs as f64, r.wall_s))
-                .collect(),
-            reference: false,
-        })
-        .filter(|s| !s.points.is_empty())
-        .collect();
-    let svg = json.with_extension("svg");
-    plot_xy(
-        &svg,
-        "plyshell solve driving: wall time against model size",
-        "free DOFs",
-        "wall time (s)",
-        &series,
-        true,
-        true,
-    )
-    .map_err(|e| format!("{}: {e}", svg.display()))?;
+    let series = series_by(&recs, |r| &r.case, |r| (r.dofs > 0 && r.wall_s > 0.0).then_some((r.dofs as f64, r.wall_s)));
+    let svg = write_records(json, &recs, &series, ("plyshell solve driving: wall time against model size", "free DOFs", "wall time (s)"))?;
     println!("records in {}, plot in {}", json.display(), svg.display());
     Ok(())
 }
