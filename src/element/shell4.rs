@@ -99,7 +99,8 @@ pub enum ShearTreatment {
     /// perfect 16×16 plate under compression (linearized buckling at 0.996 N_cr, below the
     /// analytic value, where `Mitc4` gives 1.002 and the test expects no negative pivot up
     /// to N_cr), and the free 16×16 SVK sheet dropped on a sphere with barrier contact (not
-    /// at rest after 5000 time steps).
+    /// at rest after 5000 time steps; it rests since the director orientation barrier,
+    /// `orientation`, merged after that run).
     Mitc4PlusCentre,
 }
 
