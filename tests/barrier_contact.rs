@@ -7,6 +7,8 @@
 //! node); the augmented-Lagrangian drape of the same scene (shipped `garments/drape/sphere.ron`)
 //! for the resultant.
 
+mod common;
+
 use std::path::PathBuf;
 
 use plyshell::model::State;
@@ -21,28 +23,9 @@ fn solve(text: &str) -> (BuiltScene, State, Vec<IncrementReport>) {
     let file = data_dir().join("barrier_scene.ron").display().to_string();
     let sc = scene::parse(&file, text).expect("parse");
     let built = scene::build(&sc, &file, text).expect("build");
-    let mut reports = Vec::new();
-    let mut min_gap = f64::INFINITY;
-    let state = {
-        let mut solver = Solver::new(&built.model, sc.solver.clone()).expect("solver");
-        let setup = built.contact.as_ref().expect("contact");
-        plyshell::contact::attach(&mut solver, &built.model, setup).expect("contact attaches");
-        let mut state = built.model.initial_state();
-        solver
-            .run(
-                &built.steps,
-                &mut state,
-                &mut |r, st, _| {
-                    reports.push(r.clone());
-                    // Independent check of every accepted state: −(largest penetration) is
-                    // the smallest gap of a shell face to a body.
-                    min_gap = min_gap.min(-plyshell::contact::max_penetration(&built.model, st, &setup.bodies));
-                },
-                &mut |_| {},
-            )
-            .expect("solve");
-        state
-    };
+    let (state, reports, penetration) = common::solve_on_bodies(&sc, &built);
+    // −(largest penetration) is the smallest gap of a shell face to a body.
+    let min_gap = -penetration;
     assert!(min_gap >= 0.0, "a shell face reached a body: gap {min_gap:e}");
     (built, state, reports)
 }

@@ -6,6 +6,8 @@
 //! is 1e-6 of the panel size. The closed sleeve's circumference is the pattern width W,
 //! so its mean radius must approach W/(2π) (isometric closure, small membrane strain).
 
+mod common;
+
 use plyshell::scene;
 use plyshell::solver::Solver;
 
@@ -174,24 +176,8 @@ fn two_panel_vest_sewn_round_a_torso_with_defaults_drapes_to_rest() {
     let model = &built.model;
     let gap0 = built.seams.iter().flat_map(|s| s.gaps(|n| model.x0[n])).fold(0.0, f64::max);
     assert!(gap0 > 0.2, "initial seam gap {gap0}");
-    let setup = built.contact.as_ref().expect("contact");
-    let mut solver = Solver::new(model, sc.solver.clone()).expect("solver");
-    plyshell::contact::attach(&mut solver, model, setup).expect("contact attaches");
-    let mut state = model.initial_state();
-    let mut reports = Vec::new();
-    let mut penetration = 0.0f64;
     let t = std::time::Instant::now();
-    solver
-        .run(
-            &built.steps,
-            &mut state,
-            &mut |r, st, _| {
-                reports.push(r.clone());
-                penetration = penetration.max(plyshell::contact::max_penetration(model, st, &setup.bodies));
-            },
-            &mut |_| {},
-        )
-        .unwrap_or_else(|e| panic!("{e}"));
+    let (state, reports, penetration) = common::solve_on_bodies(&sc, &built);
     let last = reports.last().expect("reports");
     let dynamics = last.dynamics.as_ref().expect("dynamic step");
     let iterations: usize = reports.iter().map(|r| r.iterations).sum();

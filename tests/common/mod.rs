@@ -1,0 +1,31 @@
+//! Helpers shared by the end-to-end test files (`mod common;` in each).
+
+use plyshell::model::State;
+use plyshell::scene::{BuiltScene, Scene};
+use plyshell::solver::{IncrementReport, Solver};
+
+/// Solves `built` from its initial state with its rigid-body contact attached. Returns the
+/// final state, every converged increment's report, and the largest penetration of a shell
+/// face into a body over all accepted states (`contact::max_penetration`, a parry3d query
+/// independent of the contact term; ≤ 0 when no face ever reached a body).
+pub fn solve_on_bodies(sc: &Scene, built: &BuiltScene) -> (State, Vec<IncrementReport>, f64) {
+    let model = &built.model;
+    let setup = built.contact.as_ref().expect("the scene has contact bodies");
+    let mut solver = Solver::new(model, sc.solver.clone()).expect("solver");
+    plyshell::contact::attach(&mut solver, model, setup).expect("contact attaches");
+    let mut state = model.initial_state();
+    let mut reports = Vec::new();
+    let mut penetration = f64::NEG_INFINITY;
+    solver
+        .run(
+            &built.steps,
+            &mut state,
+            &mut |r, st, _| {
+                reports.push(r.clone());
+                penetration = penetration.max(plyshell::contact::max_penetration(model, st, &setup.bodies));
+            },
+            &mut |_| {},
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
+    (state, reports, penetration)
+}
