@@ -505,10 +505,16 @@ impl<'m> Solver<'m> {
             if it == ds.max_iterations {
                 break;
             }
-            let t = Instant::now();
-            let mut kind = self.cholesky.factorize(&self.values);
-            self.timings.factorization += t.elapsed().as_secs_f64();
             let descent = incremental_potential && self.potential(state, scales, energy).is_some();
+            let t = Instant::now();
+            // A descent step replaces an indefinite tangent by the projected one: only whether
+            // K + c M is positive definite matters then, not its inertia (no LDLᵀ).
+            let mut kind = if descent {
+                if self.cholesky.factorize_definite(&self.values) { Ok(FactorKind::Llt) } else { Ok(FactorKind::Ldlt) }
+            } else {
+                self.cholesky.factorize(&self.values)
+            };
+            self.timings.factorization += t.elapsed().as_secs_f64();
             if descent && !matches!(kind, Ok(FactorKind::Llt)) {
                 // Indefinite: project the element Hessians for this iteration's direction.
                 self.assembler.project = true;
