@@ -52,7 +52,9 @@ impl TriSurface {
     /// `normal`: the sum over triangles of the segment each cuts from the plane. A vertex on
     /// the plane counts as on the positive side, consistently for every triangle, so the
     /// segments form closed polygons on a closed surface; for a single convex section the
-    /// result is its perimeter (a girth).
+    /// result is its perimeter (a girth). A ring of vertices in the plane is measured when
+    /// the surface continues on the negative side; a face lying in the plane with nothing
+    /// below it is not cut.
     pub fn section_length(&self, point: &Point3<f64>, normal: &Vector3<f64>) -> f64 {
         let n = normal.normalize();
         let d: Vec<f64> = self.vertices.iter().map(|v| (v - point).dot(&n)).collect();
@@ -147,9 +149,12 @@ mod tests {
         let c = cube();
         c.check_closed().expect("closed");
         assert!((c.volume() - 1.0).abs() < 1e-14);
-        // A horizontal cut is the unit square (perimeter 4), also through the vertices.
+        // A horizontal cut is the unit square (perimeter 4), also through the top vertices
+        // (the surface continues on the negative side); the bottom face, lying in the plane
+        // with the surface on its positive side, is not cut.
         assert!((c.section_length(&p(0.5, 0.5, 0.3), &Vector3::z()) - 4.0).abs() < 1e-12);
-        assert!((c.section_length(&p(0.5, 0.5, 0.0), &Vector3::z()) - 4.0).abs() < 1e-12);
+        assert!((c.section_length(&p(0.5, 0.5, 1.0), &Vector3::z()) - 4.0).abs() < 1e-12);
+        assert_eq!(c.section_length(&p(0.5, 0.5, 0.0), &Vector3::z()), 0.0);
         // A diagonal cut through the middle: a hexagon of side √2/2, perimeter 3√2.
         let hex = c.section_length(&p(0.5, 0.5, 0.5), &Vector3::new(1.0, 1.0, 1.0));
         assert!((hex - 3.0 * 2f64.sqrt()).abs() < 1e-12, "{hex}");
