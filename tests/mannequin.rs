@@ -61,6 +61,22 @@ fn segment_surfaces_are_closed_outward_and_do_not_intersect_themselves() {
     }
 }
 
+/// The self-intersection check finds a real defect: one torso vertex pushed through the
+/// opposite wall (mirrored through the ring centre at 1.5 times its distance) makes its
+/// triangles cross that wall.
+#[test]
+fn a_vertex_pushed_through_the_opposite_wall_is_found() {
+    let m = Mannequin::default_size();
+    let b = &m.segments[Segment::Torso.index()];
+    let mut s = b.surface.clone();
+    let (_, centre) = b.centre_line[b.centre_line.len() / 2];
+    let k = s.vertices.iter().enumerate().min_by(|x, y| (x.1.z - centre.z).abs().total_cmp(&(y.1.z - centre.z).abs())).map(|(k, _)| k).expect("vertices");
+    let v = s.vertices[k];
+    s.vertices[k] = Point3::new(centre.x - 1.5 * (v.x - centre.x), centre.y - 1.5 * (v.y - centre.y), v.z);
+    s.check_closed().expect("still closed");
+    assert!(!s.self_intersections().is_empty(), "the folded torso is not found");
+}
+
 #[test]
 fn girths_match_the_measurements_within_one_percent() {
     for (name, r) in sizes() {
