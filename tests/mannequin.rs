@@ -137,6 +137,25 @@ fn stature_arm_length_and_inseam_within_one_percent() {
     }
 }
 
+/// The segments of each joint overlap: the joint centre lies inside both the parent's and
+/// the child's surface (winding number 1), so the body has no gap at a joint, and keeps
+/// none in any pose (each segment carries the centre rigidly, FK test below).
+#[test]
+fn the_segments_of_each_joint_overlap_round_its_centre() {
+    for (name, r) in sizes() {
+        let m = Mannequin::new(&r);
+        for j in mannequin::JOINTS {
+            let (parent, child) = j.segments();
+            let c = m.skeleton.centre(j);
+            for s in [parent, child] {
+                let b = &m.segments[s.index()];
+                let w = b.surface.winding_number(&(b.rest.inverse() * c));
+                assert!((w - 1.0).abs() < 1e-9, "{name}: joint {} centre not inside {} (winding number {w})", j.name(), s.name());
+            }
+        }
+    }
+}
+
 /// The pose of `file` under garments/body/poses.
 fn pose(file: &str) -> Pose {
     mannequin::load_pose(Path::new(&format!("garments/body/poses/{file}.ron"))).expect("the shipped pose loads")

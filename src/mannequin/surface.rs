@@ -75,6 +75,24 @@ impl TriSurface {
         total
     }
 
+    /// Generalized winding number of the surface about `p`: the sum of the triangles' signed
+    /// solid angles over 4π (Van Oosterom & Strackee 1983, tan(Ω/2) = a·(b×c) / (abc +
+    /// (a·b)c + (a·c)b + (b·c)a) with a, b, c the vertices relative to p); 1 inside a closed
+    /// outward surface, 0 outside.
+    pub fn winding_number(&self, p: &Point3<f64>) -> f64 {
+        let total: f64 = self
+            .triangles
+            .iter()
+            .map(|t| {
+                let [a, b, c] = t.map(|i| self.vertices[i as usize] - p);
+                let (la, lb, lc) = (a.norm(), b.norm(), c.norm());
+                let den = la * lb * lc + a.dot(&b) * lc + a.dot(&c) * lb + b.dot(&c) * la;
+                2.0 * a.dot(&b.cross(&c)).atan2(den)
+            })
+            .sum();
+        total / (4.0 * std::f64::consts::PI)
+    }
+
     /// Pairs of triangles that share no vertex and intersect (touching counts). Pairs whose
     /// bounding boxes are apart are skipped; coplanar pairs are not tested (see
     /// [`triangles_intersect`]).
@@ -159,6 +177,8 @@ mod tests {
         let hex = c.section_length(&p(0.5, 0.5, 0.5), &Vector3::new(1.0, 1.0, 1.0));
         assert!((hex - 3.0 * 2f64.sqrt()).abs() < 1e-12, "{hex}");
         assert!(c.self_intersections().is_empty());
+        assert!((c.winding_number(&p(0.3, 0.6, 0.2)) - 1.0).abs() < 1e-12);
+        assert!(c.winding_number(&p(1.3, 0.6, 0.2)).abs() < 1e-12);
         let mut flipped = c.clone();
         flipped.triangles[0].swap(1, 2);
         assert!(flipped.check_closed().is_err());
