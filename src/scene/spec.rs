@@ -190,6 +190,17 @@ pub enum ShapeSpec {
     Capsule { radius: f64, height: f64 },
     /// Triangle mesh from OBJ or STL (ASCII or binary), path relative to the scene file.
     TriMesh { path: String, #[serde(default = "one")] scale: f64 },
+    /// The parametric mannequin (`src/mannequin/`): one triangle-mesh body per segment, named
+    /// `BODY.SEGMENT` (e.g. `body.torso`), placed by the pose (default: all joint angles zero,
+    /// standing on z = 0) and then by this body's translation and rotation. Paths relative to
+    /// the scene file.
+    Mannequin {
+        /// Measurements file (RON, ISO 8559-1 names).
+        measurements: String,
+        /// Pose file (RON, joint angles in degrees).
+        #[serde(default)]
+        pose: Option<String>,
+    },
 }
 
 /// Drape measures: the Cusick drape coefficient and fold count about a vertical axis
