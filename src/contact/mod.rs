@@ -9,6 +9,7 @@ pub mod interply;
 pub mod intersection;
 pub mod ipc;
 pub mod mechanics;
+pub mod motion;
 pub mod stabilize;
 pub mod trimesh_io;
 
@@ -112,7 +113,24 @@ pub fn build_contact(spec: &ContactSpec, loc: &Locator, base_dir: &Path, parts: 
         if spec.bodies[..bi].iter().any(|o| o.name == b.name) {
             return Err(loc.at(Some(&b.name), None, field, "duplicate body name"));
         }
-        bodies.push(RigidBody { name: b.name.clone(), shape, pose, mu_static: b.friction, mu_kinetic: kinetic, rounding });
+        let motion = if b.motion.is_empty() {
+            None
+        } else {
+            if matches!(spec.formulation, crate::scene::ContactFormulation::AugmentedLagrangian) {
+                return Err(bad(
+                    "motion",
+                    "a moving body needs barrier contact (formulation: Barrier()); the augmented-Lagrangian penalty contact holds bodies still".into(),
+                ));
+            }
+            let keys: Vec<_> = b.motion.iter().map(|k| (k.time, k.translation, k.rotation)).collect();
+            let m = motion::Motion::new(&keys).map_err(|(k, msg)| {
+                let t = b.motion[k].time;
+                loc.at(Some(&b.name), Some("motion"), format!("{field}.motion[{k}]"), format!("keyframe {k} (time {t}): {msg}"))
+            })?;
+            Some(std::sync::Arc::new(m))
+        };
+        let placed = motion.as_ref().map_or(pose, |m| m.at(0.0) * pose);
+        bodies.push(RigidBody { name: b.name.clone(), shape, pose: placed, mu_static: b.friction, mu_kinetic: kinetic, rounding, motion, base: pose });
     }
     let mut part_ids = Vec::new();
     for p in &spec.parts {
