@@ -105,3 +105,48 @@ fn bad_compliant_seams_are_refused() {
         assert!(err.to_string().contains(field) && err.line > 0, "{err}");
     }
 }
+
+/// The same strip as a garment (two panels, one ply, the seam in `garment.seams` with
+/// `stiffness` and `strength`): opening q/k and utilisation q/strength within 1e-6, and
+/// the tip moves by q L/(E t) + q/k.
+#[test]
+fn garment_seam_with_stiffness_is_compliant() {
+    let half = 0.5 * L;
+    let text = format!(
+        r#"Scene(
+    name: "compliant_garment",
+    materials: {{"m": StVenantKirchhoff(young: {E:e}, poisson: 0.0)}},
+    parts: [],
+    garment: Some((
+        element_size: 0.0125,
+        plies: {{"felt": (material: "m", thickness: {T})}},
+        panels: [
+            (name: "root_half", outline: [(0.0, 0.0), ({half}, 0.0), ({half}, {W}), (0.0, {W})],
+             edges: {{"root": (from: 3, to: 0), "joint": (from: 1, to: 2)}}, grain: (1.0, 0.0), plies: ["felt"]),
+            (name: "tip_half", outline: [({half}, 0.0), ({L}, 0.0), ({L}, {W}), ({half}, {W})],
+             edges: {{"joint": (from: 3, to: 0), "tip": (from: 1, to: 2)}}, grain: (1.0, 0.0), plies: ["felt"]),
+        ],
+        seams: [(name: "joint", a: (panel: "root_half", edge: "joint"), b: (panel: "tip_half", edge: "joint", reversed: true), kind: Plain,
+                 stiffness: Some({K:e}), strength: Some({STRENGTH}))],
+    )),
+    node_sets: {{"root": Edge(part: "root_half", edge: "root"), "tip": Edge(part: "tip_half", edge: "tip")}},
+    boundary: [Clamp(set: "root"), Fix(set: "tip", dofs: [Uz])],
+    loads: {{"p": EdgeForce(set: "tip", force_per_length: ({Q}, 0.0, 0.0))}},
+    steps: [(name: "pull", increments: 1, linear: true, scale: {{"p": 1.0}})],
+    monitors: [(name: "tip", point: ({L}, 0.0, 0.0), part: Some("tip_half"), dofs: [Ux])],
+    output: (vtu: false),
+)"#
+    );
+    let sc = scene::parse("compliant_garment.ron", &text).unwrap_or_else(|e| panic!("{e}"));
+    let built = scene::build(&sc, "compliant_garment.ron", &text).unwrap_or_else(|e| panic!("{e}"));
+    let summary = analysis::run(&sc, &built, &Default::default(), &mut |_| {}).unwrap_or_else(|e| panic!("{e}"));
+    let s = &summary.extra["seams"][0];
+    let rel = |a: f64, b: f64| ((a - b) / b).abs();
+    let (o, u) = (s["opening_mean"].as_f64().expect("opening"), s["utilisation_max"].as_f64().expect("utilisation"));
+    let tip = summary.monitors[0].values.last().expect("tip")[0];
+    let exact = Q * L / (E * T) + Q / K;
+    println!("garment seam: opening {o:.9e} (q/k {:.9e}), utilisation {u:.9} (q/S {}), tip {tip:.9e} vs {exact:.9e}", Q / K, Q / STRENGTH);
+    assert!(s["compliant"].as_bool() == Some(true));
+    assert!(rel(o, Q / K) < 1e-6 && rel(u, Q / STRENGTH) < 1e-6);
+    assert!(rel(tip, exact) < 1e-6, "tip {tip} vs {exact}");
+}
