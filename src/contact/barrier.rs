@@ -26,6 +26,16 @@
 //! regularisation, `friction_slip` × d̂). On commit a sliding pair's anchor is dragged to
 //! trail the node (return mapping), so the law is path-dependent across steps. With λ̄ and n̄
 //! lagged, D is a potential and its Hessian is symmetric and exact.
+//!
+//! Moving bodies (`motion`, [`super::motion`]): each attempt places the bodies at its end
+//! time ([`NodalForces::begin_motion`]); distances, barrier and friction are evaluated at
+//! that placement. The body's own displacement over the attempt is seen by conservative
+//! advancement on the relative motion (node still, body interpolated from its committed to
+//! its trial placement): nodes it would sweep over, and nodes in the barrier zone, start the
+//! iteration carried rigidly with the body, so the initial iterate is intersection-free;
+//! Newton's own collision bound then works with the body at rest at its trial placement.
+//! Friction anchors and lagged normals are stored in the body frame, so the slip is measured
+//! relative to the body's surface and a moving body carries the cloth by friction.
 
 use std::time::Instant;
 
