@@ -218,12 +218,14 @@ pub fn max_penetration(model: &crate::model::Model, state: &crate::model::State,
         .reduce(|| 0.0, f64::max)
 }
 
-/// Writes the contact, stabilization and drape sections of summary.json into `extra`.
+/// Writes the contact, stabilization and drape sections of summary.json into `extra`;
+/// `time` is the analysis time of `state` (moving bodies are placed there, `motion`).
 pub fn summarize(
     scene: &crate::scene::Scene,
     setup: &ContactSetup,
     model: &crate::model::Model,
     state: &crate::model::State,
+    time: f64,
     contributions: &[Box<dyn crate::solver::NodalForces + '_>],
     extra: &mut std::collections::BTreeMap<String, serde_json::Value>,
 ) {
@@ -237,7 +239,8 @@ pub fn summarize(
     }
     if let Some(d) = &scene.drape {
         let res = d.resolution.unwrap_or(d.specimen_radius / 1000.0);
-        let pen = max_penetration(model, state, &setup.bodies);
+        let placed: Vec<RigidBody> = setup.bodies.iter().map(|b| b.at_time(time)).collect();
+        let pen = max_penetration(model, state, &placed);
         let rep = drape::drape_report(model, state, &Vector3::from(d.center), d.disc_radius, d.specimen_radius, res, pen);
         if let Ok(v) = serde_json::to_value(rep) {
             extra.insert("drape".into(), v);
