@@ -74,11 +74,12 @@ impl Motion {
 }
 
 /// The placement a fraction `s` ∈ [0, 1] of the way from `a` to `b`: translation
-/// interpolated linearly, rotation by slerp (a half-turn, whose path is ambiguous, turns
-/// about the first axis nalgebra finds).
+/// interpolated linearly, rotation by slerp, R(s) = R_a exp(s log(R_a⁻¹ R_b)) (the shorter
+/// way round; a half-turn, whose path is ambiguous, turns about the axis of log).
 pub fn interpolate(a: &Isometry3<f64>, b: &Isometry3<f64>, s: f64) -> Isometry3<f64> {
     let tr = a.translation.vector.lerp(&b.translation.vector, s);
-    let rot = a.rotation.try_slerp(&b.rotation, s, 1e-12).unwrap_or_else(|| if s < 0.5 { a.rotation } else { b.rotation });
+    let rel = a.rotation.inverse() * b.rotation;
+    let rot = a.rotation * UnitQuaternion::from_scaled_axis(rel.scaled_axis() * s);
     Isometry3::from_parts(Translation3::from(tr), rot)
 }
 
@@ -109,6 +110,14 @@ mod tests {
         assert!((half.rotation.angle() - std::f64::consts::FRAC_PI_4).abs() < 1e-14);
         assert!((m.at(-1.0).translation.vector.norm()) < 1e-14);
         assert!((m.at(5.0).translation.vector.z - 2.0).abs() < 1e-14);
+    }
+
+    /// A half-turn between keyframes is interpolated continuously (a quarter-turn halfway).
+    #[test]
+    fn half_turns_interpolate() {
+        let m = Motion::new(&[(0.0, [0.0; 3], [0.0; 3]), (1.0, [0.0; 3], [0.0, 0.0, 180.0])]).unwrap();
+        assert!((m.at(0.5).rotation.angle() - std::f64::consts::FRAC_PI_2).abs() < 1e-12);
+        assert!((m.at(1.0).rotation.angle() - std::f64::consts::PI).abs() < 1e-12);
     }
 
     #[test]
