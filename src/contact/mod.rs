@@ -9,6 +9,7 @@ pub mod interply;
 pub mod intersection;
 pub mod ipc;
 pub mod mechanics;
+pub mod motion;
 pub mod stabilize;
 pub mod trimesh_io;
 
@@ -116,8 +117,28 @@ pub fn build_contact(spec: &ContactSpec, loc: &Locator, base_dir: &Path, parts: 
         if spec.bodies[..bi].iter().any(|o| o.name == b.name) {
             return Err(loc.at(Some(&b.name), None, field, "duplicate body name"));
         }
+        let motion = if b.motion.is_empty() {
+            None
+        } else {
+            if matches!(spec.formulation, crate::scene::ContactFormulation::AugmentedLagrangian) {
+                return Err(bad(
+                    "motion",
+                    "a moving body needs barrier contact (formulation: Barrier()); the augmented-Lagrangian penalty contact holds bodies still".into(),
+                ));
+            }
+            let keys: Vec<_> = b.motion.iter().map(|k| (k.time, k.translation, k.rotation)).collect();
+            let m = motion::Motion::new(&keys).map_err(|(k, msg)| {
+                let t = b.motion[k].time;
+                loc.at(Some(&b.name), Some("motion"), format!("{field}.motion[{k}]"), format!("keyframe {k} (time {t}): {msg}"))
+            })?;
+            Some(std::sync::Arc::new(m))
+        };
         for (name, shape, local) in shapes {
-            bodies.push(RigidBody { name, shape, pose: pose * local, mu_static: b.friction, mu_kinetic: kinetic, rounding });
+            // A segment of a composite body (mannequin) sits at `local` in the body's frame;
+            // a motion moves the whole body.
+            let base = pose * local;
+            let placed = motion.as_ref().map_or(base, |m| m.at(0.0) * base);
+            bodies.push(RigidBody { name, shape, pose: placed, mu_static: b.friction, mu_kinetic: kinetic, rounding, motion: motion.clone(), base });
         }
     }
     let mut part_ids = Vec::new();
@@ -234,12 +255,14 @@ pub fn max_penetration(model: &crate::model::Model, state: &crate::model::State,
         .reduce(|| 0.0, f64::max)
 }
 
-/// Writes the contact, stabilization and drape sections of summary.json into `extra`.
+/// Writes the contact, stabilization and drape sections of summary.json into `extra`;
+/// `time` is the analysis time of `state` (moving bodies are placed there, `motion`).
 pub fn summarize(
     scene: &crate::scene::Scene,
     setup: &ContactSetup,
     model: &crate::model::Model,
     state: &crate::model::State,
+    time: f64,
     contributions: &[Box<dyn crate::solver::NodalForces + '_>],
     extra: &mut std::collections::BTreeMap<String, serde_json::Value>,
 ) {
@@ -253,7 +276,8 @@ pub fn summarize(
     }
     if let Some(d) = &scene.drape {
         let res = d.resolution.unwrap_or(d.specimen_radius / 1000.0);
-        let pen = max_penetration(model, state, &setup.bodies);
+        let placed: Vec<RigidBody> = setup.bodies.iter().map(|b| b.at_time(time)).collect();
+        let pen = max_penetration(model, state, &placed);
         let rep = drape::drape_report(model, state, &Vector3::from(d.center), d.disc_radius, d.specimen_radius, res, pen);
         if let Ok(v) = serde_json::to_value(rep) {
             extra.insert("drape".into(), v);
