@@ -63,6 +63,8 @@ pub fn build_contact(spec: &ContactSpec, loc: &Locator, base_dir: &Path, parts: 
         }
         // The shapes of this body: (name, shape, placement relative to the body's placement).
         let single = |shape: Shape| vec![(b.name.clone(), shape, Isometry3::identity())];
+        // Per-shape motions of a posed mannequin (one per segment), if it has a motion file.
+        let mut segment_motions: Option<Vec<motion::Motion>> = None;
         let shapes = match &b.shape {
             ShapeSpec::Plane => single(Shape::Plane),
             ShapeSpec::Sphere { radius } => {
@@ -100,7 +102,11 @@ pub fn build_contact(spec: &ContactSpec, loc: &Locator, base_dir: &Path, parts: 
                 warnings.extend(w.into_iter().map(|m| format!("{}: {m}", full.display())));
                 single(Shape::mesh(&soup).map_err(|e| bad("path", format!("{}: {e}", full.display())))?)
             }
-            ShapeSpec::Mannequin { measurements, pose } => mannequin_shapes(&b.name, base_dir, measurements, pose.as_deref(), &bad)?,
+            ShapeSpec::Mannequin { measurements, pose, motion } => {
+                let (shapes, motions) = mannequin_shapes(&b.name, base_dir, measurements, pose.as_deref(), motion.as_deref(), &bad)?;
+                segment_motions = motions;
+                shapes
+            }
         };
         if !(b.friction.is_finite() && b.friction >= 0.0) {
             return Err(bad("friction", format!("expected a non-negative friction coefficient, found {}", b.friction)));
@@ -133,6 +139,24 @@ pub fn build_contact(spec: &ContactSpec, loc: &Locator, base_dir: &Path, parts: 
             })?;
             Some(std::sync::Arc::new(m))
         };
+        if let Some(motions) = &segment_motions {
+            if motion.is_some() {
+                return Err(bad("motion", "a mannequin with a motion file moves by its poses; give its keyframes there (pose translations), not as body keyframes".into()));
+            }
+            if matches!(spec.formulation, crate::scene::ContactFormulation::AugmentedLagrangian) {
+                return Err(bad("shape", "a mannequin with a motion file needs barrier contact (formulation: Barrier()); the augmented-Lagrangian penalty contact holds bodies still".into()));
+            }
+            // Segment keyframes K_s(t) are global isometries that carry the first frame's
+            // placement P·F_s(t₀) to P·F_s(t); the body's own placement P conjugates them.
+            for ((name, shape, local), m) in shapes.into_iter().zip(motions) {
+                let base = pose * local;
+                let keys: Vec<_> = m.keys().iter().map(|(t, k)| (*t, pose * k * pose.inverse())).collect();
+                let m = motion::Motion::from_isometries(keys).map(std::sync::Arc::new);
+                let placed = m.as_ref().map_or(base, |m| m.at(0.0) * base);
+                bodies.push(RigidBody { name, shape, pose: placed, mu_static: b.friction, mu_kinetic: kinetic, rounding, motion: m, base });
+            }
+            continue;
+        }
         for (name, shape, local) in shapes {
             // A segment of a composite body (mannequin) sits at `local` in the body's frame;
             // a motion moves the whole body.
@@ -190,25 +214,59 @@ fn mannequin_shapes(
     base_dir: &Path,
     measurements: &str,
     pose: Option<&str>,
+    motion: Option<&str>,
     bad: &dyn Fn(&str, String) -> SceneError,
-) -> Result<Vec<(String, Shape, Isometry3<f64>)>, SceneError> {
+) -> Result<MannequinShapes, SceneError> {
     use crate::mannequin::{self, Mannequin};
     let located = |key: &str, e: SceneError| if e.line == 0 && e.field == "file" { bad(key, format!("{}: {}", e.file, e.message)) } else { e };
     let m = mannequin::load_measurements(&base_dir.join(measurements)).map_err(|e| located("measurements", e))?;
-    let pose = match pose {
-        Some(p) => mannequin::load_pose(&base_dir.join(p)).map_err(|e| located("pose", e))?,
-        None => mannequin::Pose::default(),
+    let moves = match motion {
+        Some(p) => Some(mannequin::load_motion(&base_dir.join(p)).map_err(|e| located("motion", e))?),
+        None => None,
+    };
+    let pose = match (&moves, pose) {
+        (Some(mv), _) => mv.frames.first().map(|f| f.2.clone()).unwrap_or_default(),
+        (None, Some(p)) => mannequin::load_pose(&base_dir.join(p)).map_err(|e| located("pose", e))?,
+        (None, None) => mannequin::Pose::default(),
     };
     let body = Mannequin::new(&m);
     let placements = body.placements(&pose);
+    // Segment motions: forward kinematics sampled at every frame and at SAMPLES − 1 points
+    // between frames (the contact interpolates linearly/slerp between samples, the
+    // mannequin linearly in joint angles: the two agree at the samples).
+    const SAMPLES: usize = 32;
+    let segment_motions = moves.as_ref().map(|mv| {
+        let mut times = Vec::new();
+        for w in mv.frames.windows(2) {
+            let (t0, t1) = (w[0].0, w[1].0);
+            times.extend((0..SAMPLES).map(|k| t0 + (t1 - t0) * k as f64 / SAMPLES as f64));
+        }
+        times.extend(mv.frames.last().map(|f| f.0));
+        let mut keys: Vec<Vec<(f64, Isometry3<f64>)>> = vec![Vec::with_capacity(times.len()); body.segments.len()];
+        for &t in &times {
+            for (s, (now, first)) in body.placements(&mv.pose_at(t)).iter().zip(&placements).enumerate() {
+                keys[s].push((t, now * first.inverse()));
+            }
+        }
+        keys.into_iter().filter_map(motion::Motion::from_isometries).collect::<Vec<_>>()
+    });
+    if let Some(m) = &segment_motions
+        && m.len() != body.segments.len()
+    {
+        return Err(bad("motion", "the motion's frame times must increase strictly".into()));
+    }
     let mut out = Vec::with_capacity(body.segments.len());
     for (seg, place) in body.segments.iter().zip(placements) {
         let soup = TriSoup { vertices: seg.surface.vertices.iter().map(|v| v.coords).collect(), triangles: seg.surface.triangles.clone() };
         let shape = Shape::mesh(&soup).map_err(|e| bad("measurements", format!("segment {}: {e}", seg.segment.name())))?;
         out.push((format!("{name}.{}", seg.segment.name()), shape, place));
     }
-    Ok(out)
+    Ok((out, segment_motions))
 }
+
+/// The segments of a mannequin body, (name, shape, placement in the body's frame), and, with
+/// a motion file, one keyframed motion per segment.
+type MannequinShapes = (Vec<(String, Shape, Isometry3<f64>)>, Option<Vec<motion::Motion>>);
 
 /// Adds the contact and stabilization terms of `setup` to `solver` (drape falls and settles
 /// in a `Dynamic` step of the solver, `solver::dynamics`). A barrier formulation needs an

@@ -51,6 +51,13 @@ impl Motion {
         Ok(Self { keys: out })
     }
 
+    /// A motion from keyframe isometries (time, K) in strictly increasing time (e.g. sampled
+    /// from a posed mannequin's forward kinematics); None when empty or not increasing.
+    pub fn from_isometries(keys: Vec<(f64, Isometry3<f64>)>) -> Option<Self> {
+        let increasing = keys.windows(2).all(|w| w[1].0 > w[0].0) && keys.iter().all(|k| k.0.is_finite());
+        (!keys.is_empty() && increasing).then_some(Self { keys })
+    }
+
     /// The keyframe isometry K(t): piecewise linear in translation, slerp in rotation, held
     /// constant outside the keyframe times.
     pub fn at(&self, t: f64) -> Isometry3<f64> {
@@ -65,6 +72,11 @@ impl Motion {
             }
         }
         self.keys[self.keys.len() - 1].1
+    }
+
+    /// The keyframes (time, K).
+    pub fn keys(&self) -> &[(f64, Isometry3<f64>)] {
+        &self.keys
     }
 
     /// Time of the last keyframe (the body is still from then on).

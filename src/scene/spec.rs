@@ -233,6 +233,11 @@ pub enum ShapeSpec {
         /// Pose file (RON, joint angles in degrees).
         #[serde(default)]
         pose: Option<String>,
+        /// Motion file (RON: pose files at times, `garments/body/motion.ron`): each segment
+        /// then moves with its own forward kinematics on the analysis clock
+        /// (`contact::motion`), starting from the first frame's pose (`pose` is then unused).
+        #[serde(default)]
+        motion: Option<String>,
     },
 }
 
