@@ -91,6 +91,21 @@ pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &m
     let mut state = model.initial_state();
     let steps = &built.steps;
     let every = scene.output.every.max(1);
+    // Series time (PVD, glTF poses): a step's pseudo-time (step index + fraction) except
+    // that a `Dynamic` step spans its simulated seconds; `shift` carries the seconds of the
+    // Dynamic steps before, so times stay increasing across steps.
+    let mut shift = 0.0;
+    let mut series_time = move |step: usize, pseudo: f64, dynamics: Option<(f64, bool)>| match dynamics {
+        Some((seconds, end_of_step)) => {
+            let t = step as f64 + shift + seconds;
+            if end_of_step {
+                shift += seconds - 1.0;
+            }
+            t
+        }
+        None => pseudo + shift,
+    };
+    let mut last_series_time = 0.0;
     let result = solver.run(
         steps,
         &mut state,
@@ -100,13 +115,15 @@ pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &m
             }
             summary.newton_iterations += report.iterations;
             let last_of_step = report.increment == steps[report.step].increments || report.dynamics.as_ref().is_some_and(|d| d.end_of_step);
+            let time = series_time(report.step, report.time, report.dynamics.as_ref().map(|d| (d.time, d.end_of_step)));
+            last_series_time = time;
             if let (Some(dir), true) = (&options.out_dir, scene.output.vtu && (report.increment % every == 0 || last_of_step)) {
                 let t = Instant::now();
                 let name = format!("{}_{:04}.vtu", scene.name, pvd_entries.len() + 1);
                 let mut export = export.clone();
                 export.extra_point_data = solved.nodal_forces().iter().flat_map(|c| c.point_data(model, st)).collect();
                 match write_state_vtu(&dir.join(&name), model, st, &export) {
-                    Ok(()) => pvd_entries.push((report.time, name)),
+                    Ok(()) => pvd_entries.push((time, name)),
                     Err(e) => io_error = io_error.take().or(Some(e.to_string())),
                 }
                 if garment_export {
@@ -115,12 +132,12 @@ pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &m
                     model.external_force(st, &report.scales, &mut f_ext);
                     let forces = Some((solved.internal_force(), f_ext.as_slice()));
                     match crate::garment::export::write_garment_vtu(&dir.join(&gname), model, Some(st), built.garment.as_ref(), &built.seams, forces, export.binary) {
-                        Ok(()) => garment_entries.push((report.time, gname)),
+                        Ok(()) => garment_entries.push((time, gname)),
                         Err(e) => io_error = io_error.take().or(Some(e.to_string())),
                     }
                     if let Some(nodes) = &surface_nodes {
                         if (poses.len() + 1) * nodes.len() <= MAX_POSE_VERTICES {
-                            poses.push((report.time, nodes.iter().map(|&n| model.position(st, n).into()).collect()));
+                            poses.push((time, nodes.iter().map(|&n| model.position(st, n).into()).collect()));
                         } else {
                             poses_dropped += 1;
                         }
@@ -185,11 +202,13 @@ pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &m
     summary.status = status;
     if let Some(dir) = &options.out_dir {
         let t = Instant::now();
-        if let Err(e) = &result {
+        if result.is_err() {
             // Leave the last converged state for inspection.
             let name = format!("{}_last_converged.vtu", scene.name);
             match write_state_vtu(&dir.join(&name), model, &state, &export) {
-                Ok(()) => pvd_entries.push((e.last_converged_time, name)),
+                // The series time of the last converged state (a Dynamic step's seconds
+                // are not in the error's pseudo-time).
+                Ok(()) => pvd_entries.push((last_series_time, name)),
                 Err(e) => problems.push(format!("{name}: {e}")),
             }
         }

@@ -108,3 +108,35 @@ fn a_failed_solve_names_only_the_last_state_file() {
     assert!(err.contains("strip_last_converged.vtu") && !err.contains("strip_0001.vtu") && !err.contains("strip.pvd"), "{err}");
     assert!(out.join("summary.json").exists() && out.join("strip_0002.vtu").exists());
 }
+
+/// PVD times of a `Dynamic` step are its simulated seconds (issue 17, item 7), and stay
+/// increasing across a static step before and after it: the strip is pulled statically
+/// (2 increments: times 0.5, 1), swings for 0.03 s in fixed steps of 0.01 s (times
+/// 1.01, 1.02, 1.03) and is pulled again (2 increments: 1.53, 2.03).
+#[test]
+fn pvd_times_of_a_dynamic_step_are_seconds() {
+    let d = scratch("pvd_seconds");
+    let text = STRIP.replace(
+        r#"steps: [(name: "load", increments: 2, scale: {"pull": 1.0})],"#,
+        r#"steps: [(name: "load", increments: 2, scale: {"pull": 1.0}),
+            (name: "swing", increments: 1, scale: {"pull": 2.0}, kind: Dynamic((dt: 0.01, dt_max: 0.01, duration: 0.03))),
+            (name: "again", increments: 2, scale: {"pull": 3.0})],"#,
+    );
+    let text = text.replace("thickness: 0.01)", "thickness: 0.01, areal_density: 78.5)");
+    assert!(text.contains("swing") && text.contains("areal_density"), "the strip scene changed: update this test's replacement");
+    let scene = write(&d, "strip.ron", &text);
+    let out = d.join("out");
+    let (code, _, err) = run(&["solve", scene.to_str().expect("utf8"), "--out", out.to_str().expect("utf8"), "--quiet"]);
+    assert_eq!(code, 0, "{err}");
+    let pvd = std::fs::read_to_string(out.join("strip.pvd")).expect("pvd");
+    let times: Vec<f64> = pvd
+        .split("timestep=\"")
+        .skip(1)
+        .map(|s| s.split('"').next().and_then(|v| v.parse().ok()).expect("a timestep number"))
+        .collect();
+    let expected = [0.5, 1.0, 1.01, 1.02, 1.03, 1.53, 2.03];
+    assert_eq!(times.len(), expected.len(), "{pvd}");
+    for (t, e) in times.iter().zip(expected) {
+        assert!((t - e).abs() < 1e-9, "PVD times {times:?}, expected {expected:?}");
+    }
+}
