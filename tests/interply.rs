@@ -1,6 +1,6 @@
 //! Inter-ply contact (issue 5, multi-ply must-show): three plies of a cantilevered strip
 //! under their own weight, unbonded (held apart only by inter-ply contact with friction
-//! μ = 0.3) and bonded at stitch lines.
+//! μ = 0.3: the default barrier formulation, `contact::ipc`) and bonded at stitch lines.
 //!
 //! References (Euler–Bernoulli cantilever under a uniform load q, tip deflection
 //! w = q L⁴ / (8 EI), Timoshenko & Gere; the composite-section argument of tests/plies.rs):
@@ -110,8 +110,11 @@ fn ply_penetration(model: &Model, state: &State, parts: &[usize]) -> f64 {
 
 struct Run {
     tip: f64,
-    /// Whether the scene had inter-ply contact.
+    /// Whether the scene had inter-ply contact: pairs of adjacent plies in contact (a single
+    /// shell, e.g. a laminate, may still have barrier self-contact, on by default).
     contact: bool,
+    /// Whether that contact is the barrier formulation (the default).
+    barrier: bool,
     /// Shell nodes of the model.
     nodes: usize,
     penetration: f64,
@@ -145,7 +148,8 @@ fn solve_scene(text: &str) -> Run {
     let parts: Vec<usize> = ["strip/top", "strip/mid", "strip/bot"].iter().filter_map(|n| model.parts.iter().position(|p| p.name == *n)).collect();
     Run {
         tip,
-        contact: built.interply.is_some(),
+        contact: built.interply.as_ref().is_some_and(|s| !s.ply_pairs.is_empty()),
+        barrier: built.interply.as_ref().is_some_and(|s| s.barrier.is_some()),
         nodes: model.n_nodes(),
         penetration: if parts.len() == 3 { ply_penetration(model, &state, &parts) } else { 0.0 },
         iterations,
@@ -186,9 +190,18 @@ fn stitching_stiffens_plies_that_contact_keeps_apart() {
     // the shell's shear and membrane effects), no ply through another (5 % of t).
     let free = solve(&[]);
     assert!(free.contact, "a multi-ply garment with interply enabled gets inter-ply contact");
+    assert!(free.barrier, "the default inter-ply contact is the barrier formulation");
     report("unbonded, inter-ply contact", &free, w_unbonded);
     assert!((-free.tip / w_unbonded - 1.0).abs() < 0.03, "unbonded tip {} vs {w_unbonded}", -free.tip);
     assert!(free.penetration < 0.05 * T, "ply penetration {} m", free.penetration);
+
+    // The node-to-surface penalty stays available as an explicit opt-in, with the same
+    // bounds (3 % on the tip, 5 % of t penetration).
+    let penalty = solve_scene(&cantilever(&[]).replace("interply: (enabled: true, friction: 0.3)", "interply: (enabled: true, friction: 0.3, formulation: Penalty)"));
+    assert!(penalty.contact && !penalty.barrier, "formulation: Penalty gives the penalty contact");
+    report("unbonded, penalty inter-ply contact (opt-in)", &penalty, w_unbonded);
+    assert!((-penalty.tip / w_unbonded - 1.0).abs() < 0.03, "unbonded penalty tip {} vs {w_unbonded}", -penalty.tip);
+    assert!(penalty.penetration < 0.05 * T, "penalty ply penetration {} m", penalty.penetration);
 
     // Stitched at every node column: the composite section (3 %).
     let all: Vec<f64> = (1..=20).map(|i| i as f64 * H).collect();
