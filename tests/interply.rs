@@ -232,7 +232,8 @@ fn stitching_stiffens_plies_that_contact_keeps_apart() {
 /// the cylinder carries the strip's weight Σρ_k g A (static equilibrium, 2 %, as
 /// tests/sleeve_on_arm.rs). And no two triangles of the plies, thickened to prisms of the
 /// contact thickness (1 − f) h (f = 0.1, the barrier's share of the thickness, the
-/// compressible part of the fabric), overlap (`contact::intersection`, GJK on every pair).
+/// compressible part of the fabric), overlap (`contact::intersection`, GJK on every pair) —
+/// at rest and in every accepted state.
 #[test]
 fn three_ply_strip_bent_over_a_cylinder_keeps_its_plies_apart() {
     const R: f64 = 0.05;
@@ -277,10 +278,24 @@ fn three_ply_strip_bent_over_a_cylinder_keeps_its_plies_apart() {
     plyshell::contact::interply::attach(&mut solver, model, built.interply.as_ref().expect("interply")).expect("inter-ply contact attaches");
     let mut state = model.initial_state();
     let mut reports = Vec::new();
-    solver.run(&built.steps, &mut state, &mut |r, _, _| reports.push(r.clone()), &mut |_| {}).unwrap_or_else(|e| panic!("{e}"));
-    let seconds = t.elapsed().as_secs_f64();
-    let iterations: usize = reports.iter().map(|r| r.iterations).sum();
     let parts: Vec<usize> = ["strip/outer", "strip/carbon", "strip/liner"].iter().map(|n| model.parts.iter().position(|p| p.name == *n).expect("ply part")).collect();
+    // The independent check on every accepted state, timed apart from the solve.
+    let (mut overlaps_all, mut check_s) = (0usize, 0.0f64);
+    solver
+        .run(
+            &built.steps,
+            &mut state,
+            &mut |r, s, _| {
+                reports.push(r.clone());
+                let tc = std::time::Instant::now();
+                overlaps_all += plyshell::contact::intersection::intersecting_prisms(model, s, &parts, 1.0 - 0.1).len();
+                check_s += tc.elapsed().as_secs_f64();
+            },
+            &mut |_| {},
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
+    let seconds = t.elapsed().as_secs_f64() - check_s;
+    let iterations: usize = reports.iter().map(|r| r.iterations).sum();
     // Both directions: nodes of ply k+1 against ply k, and of ply k against ply k+1.
     let down = ply_penetration(model, &state, &parts);
     let reversed: Vec<usize> = parts.iter().rev().copied().collect();
@@ -317,7 +332,9 @@ fn three_ply_strip_bent_over_a_cylinder_keeps_its_plies_apart() {
         100.0 * body_pen,
         100.0 * (lift / weight - 1.0)
     );
+    println!("overlapping prisms over all {} accepted states: {overlaps_all} (check {check_s:.1} s)", reports.len());
     assert!(overlaps.is_empty(), "{} overlapping prisms, first {:?}", overlaps.len(), overlaps.first());
+    assert_eq!(overlaps_all, 0, "overlapping prisms in an accepted state");
     assert!(pen < 0.05 * h_min, "ply penetration {pen} m");
     assert!(body_pen < 0.05, "cylinder penetration {body_pen} of h");
     assert!((lift / weight - 1.0).abs() < 0.02, "reaction {lift} vs weight {weight}");

@@ -6,15 +6,19 @@ use plyshell::scene;
 use plyshell::solver::{IncrementReport, Solver};
 
 /// Solves `text`, attaching the garment's barrier contact; returns the model-owning scene,
-/// the final state and the increment reports.
-fn solve(text: &str) -> (scene::BuiltScene, State, Vec<IncrementReport>, f64) {
+/// the final state, the increment reports, the solve's seconds and the overlapping prisms
+/// of all parts at the contact thickness 0.8 h (`contact::intersection`, independent of the
+/// contact code) summed over every accepted state.
+fn solve(text: &str) -> (scene::BuiltScene, State, Vec<IncrementReport>, f64, usize) {
     let sc = scene::parse("surface.ron", text).unwrap_or_else(|e| panic!("{e}"));
     let built = scene::build(&sc, "surface.ron", text).unwrap_or_else(|e| panic!("{e}"));
     let t = std::time::Instant::now();
     let mut state = built.model.initial_state();
     let mut reports = Vec::new();
+    let (mut overlaps, mut check_s) = (0usize, 0.0f64);
     {
         let model = &built.model;
+        let parts: Vec<usize> = (0..model.parts.len()).collect();
         let mut solver = Solver::new(model, sc.solver.clone()).expect("solver");
         if let Some(c) = &built.contact {
             plyshell::contact::attach(&mut solver, model, c).expect("body contact attaches");
@@ -22,10 +26,22 @@ fn solve(text: &str) -> (scene::BuiltScene, State, Vec<IncrementReport>, f64) {
         let setup = built.interply.as_ref().expect("barrier surface contact");
         assert!(setup.barrier.is_some(), "the barrier formulation");
         plyshell::contact::interply::attach(&mut solver, model, setup).expect("surface contact attaches");
-        solver.run(&built.steps, &mut state, &mut |r, _, _| reports.push(r.clone()), &mut |_| {}).unwrap_or_else(|e| panic!("{e}"));
+        solver
+            .run(
+                &built.steps,
+                &mut state,
+                &mut |r, s, _| {
+                    reports.push(r.clone());
+                    let tc = std::time::Instant::now();
+                    overlaps += plyshell::contact::intersection::intersecting_prisms(model, s, &parts, 1.0 - 0.2).len();
+                    check_s += tc.elapsed().as_secs_f64();
+                },
+                &mut |_| {},
+            )
+            .unwrap_or_else(|e| panic!("{e}"));
     }
-    let seconds = t.elapsed().as_secs_f64();
-    (built, state, reports, seconds)
+    let seconds = t.elapsed().as_secs_f64() - check_s;
+    (built, state, reports, seconds, overlaps)
 }
 
 /// A 10 cm fabric patch (0.4 mm, 0.2 kg/m², E = 10 MPa) lying on a clamped fabric floor of the
@@ -72,9 +88,10 @@ fn patch_slide(built: &scene::BuiltScene, state: &State, reports: &[IncrementRep
 /// membrane stretch: asserted below 0.2 mm in 0.3 s (sliding freely it would move 88 mm).
 #[test]
 fn fabric_patch_sticks_on_a_slope_below_the_friction_angle() {
-    let (built, state, reports, seconds) = solve(&slope(0.2));
+    let (built, state, reports, seconds, overlaps) = solve(&slope(0.2));
     let (ux, t) = patch_slide(&built, &state, &reports);
-    println!("slope tan θ = 0.2: patch moved {ux:.3e} m in {t:.3} s ({} time steps, {seconds:.1} s)", reports.len());
+    println!("slope tan θ = 0.2: patch moved {ux:.3e} m in {t:.3} s ({} time steps, {seconds:.1} s); overlapping prisms over all states {overlaps}", reports.len());
+    assert_eq!(overlaps, 0, "overlapping prisms");
     assert!((t - 0.3).abs() < 1e-9, "ran to {t}");
     assert!(ux.abs() < 2e-4, "the patch crept {ux} m on a slope below the friction angle");
 }
@@ -85,7 +102,8 @@ fn fabric_patch_sticks_on_a_slope_below_the_friction_angle() {
 /// trails where tanh(|s|/δ) = tanh 2 = 0.964), and backward Euler adds O(Δt/t).
 #[test]
 fn fabric_patch_slides_on_a_slope_above_the_friction_angle() {
-    let (built, state, reports, seconds) = solve(&slope(0.5));
+    let (built, state, reports, seconds, overlaps) = solve(&slope(0.5));
+    assert_eq!(overlaps, 0, "overlapping prisms in an accepted state");
     let (ux, t) = patch_slide(&built, &state, &reports);
     let th = 0.5f64.atan();
     let exact = 0.5 * 9.81 * (th.sin() - 0.3 * th.cos()) * t * t;
@@ -119,7 +137,9 @@ fn nbc_sleeve(mu: f64, dynamic: bool) -> String {
 /// the compression tolerance (5 % of the thinner ply) of their thickness; a Dynamic step ends
 /// at rest.
 fn check_sleeve(mu: f64, dynamic: bool) {
-    let (built, state, reports, seconds) = solve(&nbc_sleeve(mu, dynamic));
+    let (built, state, reports, seconds, overlaps_all) = solve(&nbc_sleeve(mu, dynamic));
+    println!("NBC sleeve, μ = {mu}, dynamic {dynamic}: overlapping prisms over all {} accepted states {overlaps_all}", reports.len());
+    assert_eq!(overlaps_all, 0, "overlapping prisms in an accepted state");
     let model = &built.model;
     let parts: Vec<usize> = (0..model.parts.len()).collect();
     let overlaps = plyshell::contact::intersection::intersecting_prisms(model, &state, &parts, 1.0 - 0.2);
