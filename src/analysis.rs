@@ -58,6 +58,9 @@ pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &m
     if let Some(s) = &built.interply {
         crate::contact::interply::attach(&mut solver, model, s).map_err(RunError::Setup)?;
     }
+    if let Some(c) = crate::garment::compliant::CompliantSeams::new(&built.seams) {
+        solver.add_nodal_forces(Box::new(c));
+    }
     let (dofs, tangent_nnz, factor_nnz) = solver.sizes();
     let mut summary = Summary {
         scene: scene.name.clone(),
@@ -145,7 +148,7 @@ pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &m
     if let Some(c) = &built.contact {
         let mut extra = std::mem::take(&mut summary.extra);
         let measured = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-            crate::contact::summarize(scene, c, model, &state, solver.nodal_forces(), &mut extra);
+            crate::contact::summarize(scene, c, model, &state, solver.clock(), solver.nodal_forces(), &mut extra);
         }));
         if measured.is_err() {
             problems.push("the contact and drape measures failed (see the message above)".into());
@@ -155,6 +158,24 @@ pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &m
     if built.interply.is_some() {
         for (name, v) in solver.nodal_forces().iter().filter_map(|c| c.summary()) {
             summary.extra.entry(name).or_insert(v);
+        }
+    }
+    if !built.seams.is_empty() {
+        // Per seam at the final state: force per length (magnitude, along, across), utilisation
+        // and opening (`garment::compliant`).
+        let mut f_ext = vec![0.0; solver.internal_force().len()];
+        if let Some(last) = summary.increments.last() {
+            model.external_force(&state, &last.scales, &mut f_ext);
+        }
+        let forces = (!summary.increments.is_empty()).then_some((solver.internal_force(), f_ext.as_slice()));
+        let position = |n: usize| model.position(&state, n);
+        let seams: Vec<_> = built
+            .seams
+            .iter()
+            .map(|s| crate::garment::compliant::summarize(s, &crate::garment::compliant::seam_points(s, position, forces), position))
+            .collect();
+        if let Ok(v) = serde_json::to_value(seams) {
+            summary.extra.insert("seams".into(), v);
         }
     }
     let status = match &result {

@@ -513,7 +513,8 @@ pub fn corpus(dir: &Path) -> Vec<PathBuf> {
             let p = e.path();
             if p.is_dir() {
                 stack.push(p);
-            } else if p.extension().is_some_and(|x| x == "ron") {
+            } else if p.extension().is_some_and(|x| x == "ron") && std::fs::read_to_string(&p).is_ok_and(|t| t.contains("Scene(")) {
+                // Scenes only: the mannequin's measurement, pose and motion files are not scenes.
                 out.push(p);
             }
         }

@@ -34,3 +34,4 @@ pub mod garment;
 pub mod pattern;
 pub mod budget;
 pub mod fuzz;
+pub mod mannequin;

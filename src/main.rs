@@ -1,5 +1,5 @@
 //! Command line: `plyshell solve`, `plyshell demo`, `plyshell check`, `plyshell import`, `plyshell export`,
-//! `plyshell bench`.
+//! `plyshell bench`, `plyshell body`.
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -120,6 +120,24 @@ enum Command {
         #[arg(long, value_parser = parse_unit)]
         units: Option<plyshell::garment::LengthUnit>,
     },
+    /// Generate the parametric mannequin from body measurements and write it posed as OBJ
+    /// (one object per segment): the zero-angle pose, a pose file, or every pose of a motion.
+    Body {
+        /// Measurements file (RON, ISO 8559-1 names, metres); default: the default size.
+        measurements: Option<PathBuf>,
+        /// Pose file (RON): joint angles in degrees.
+        #[arg(long, conflicts_with = "motion")]
+        pose: Option<PathBuf>,
+        /// Motion file (RON): timed pose files; one OBJ per pose.
+        #[arg(long)]
+        motion: Option<PathBuf>,
+        /// Mesh refinement (1–8), overriding the measurements file's `resolution`.
+        #[arg(long)]
+        resolution: Option<u32>,
+        /// Output directory.
+        #[arg(long, default_value = "out/body")]
+        out: PathBuf,
+    },
     /// Run the verification benchmarks at several mesh sizes: table, JSON and error-vs-time plot.
     Bench {
         /// Write the records as JSON here (the plot goes beside it as .svg).
@@ -150,6 +168,7 @@ fn main() -> ExitCode {
         Command::Export { scene, inp } => scene::load(&scene).map_err(|e| e.to_string()).and_then(|(s, b)| export_inp(&s, &b, &inp)),
         Command::Import { pattern, out, size, units } => import(&pattern, &out, size.as_deref(), units),
         Command::Bench { json, quick, drive } => if drive { bench::drive::run_drive(&json, quick) } else { bench::run_all(&json, quick) }.map_err(|e| e.to_string()),
+        Command::Body { measurements, pose, motion, resolution, out } => body(measurements.as_deref(), pose.as_deref(), motion.as_deref(), resolution, &out),
         Command::Fuzz { corpus, seed, count, solve_every, jobs, work, check_timeout, solve_timeout } => {
             fuzz(corpus, seed, count, solve_every, jobs, work, check_timeout, solve_timeout)
         }
@@ -188,6 +207,60 @@ fn fuzz(corpus: PathBuf, seed: u64, count: usize, solve_every: usize, jobs: usiz
     let report = fuzz::run(&cfg).map_err(|e| e.to_string())?;
     say!("{report}");
     if report.failures.is_empty() { Ok(()) } else { Err(format!("{} failing mutants", report.failures.len())) }
+}
+
+/// `plyshell body`: generates the mannequin, prints its segments and measurements (requested
+/// and measured on the surfaces), and writes one OBJ per pose into `out`.
+fn body(measurements: Option<&Path>, pose: Option<&Path>, motion: Option<&Path>, resolution: Option<u32>, out: &Path) -> Result<(), String> {
+    use plyshell::mannequin::{self, Joint, Mannequin, Measurements, Pose, Segment};
+    let mut m = match measurements {
+        Some(p) => mannequin::load_measurements(p).map_err(|e| e.to_string())?,
+        None => Measurements::default_size().fill(),
+    };
+    if let Some(r) = resolution {
+        if !(1..=8).contains(&r) {
+            return Err(format!("--resolution {r}: must be 1 to 8"));
+        }
+        m.resolution = r;
+    }
+    let poses: Vec<(String, Pose)> = match (pose, motion) {
+        (Some(p), _) => vec![(p.file_stem().map_or("pose".into(), |s| s.to_string_lossy().into_owned()), mannequin::load_pose(p).map_err(|e| e.to_string())?)],
+        (None, Some(mp)) => {
+            let mo = mannequin::load_motion(mp).map_err(|e| e.to_string())?;
+            mo.frames.into_iter().enumerate().map(|(k, (t, name, p))| (format!("{k:02}_{name}_t{t}"), p)).collect()
+        }
+        (None, None) => vec![("zero_pose".into(), Pose::default())],
+    };
+    if out.exists() && !out.is_dir() {
+        return Err(format!("--out {}: exists and is not a directory; name a directory for the OBJ files", out.display()));
+    }
+    std::fs::create_dir_all(out).map_err(|e| format!("--out {}: {e}", out.display()))?;
+    let body = Mannequin::new(&m);
+    say!("mannequin: stature {:.3} m, {} segments, {} triangles (resolution {})", m.stature, body.segments.len(), body.n_triangles(), m.resolution);
+    say!("  {:<12} {:>8} {:>9} {:>10}", "segment", "vertices", "triangles", "volume l");
+    for s in &body.segments {
+        say!("  {:<12} {:>8} {:>9} {:>10.3}", s.segment.name(), s.surface.vertices.len(), s.surface.triangles.len(), 1e3 * s.surface.volume());
+    }
+    say!("  {:<12} {:<16} {:>10} {:>10} {:>9}", "segment", "measurement", "requested", "measured", "error");
+    let row = |seg: &str, name: &str, want: f64, got: f64| say!("  {seg:<12} {name:<16} {want:>10.4} {got:>10.4} {:>8.3}%", 100.0 * (got - want) / want);
+    for (seg, g, measured) in body.girth_report() {
+        row(seg.name(), g.name, g.requested, measured);
+    }
+    let rest = body.placements(&Pose::default());
+    let rest = &rest;
+    let zs = |s: Segment| body.segments[s.index()].surface.vertices.iter().map(move |v| (rest[s.index()] * v).z);
+    let top = zs(Segment::Head).fold(f64::MIN, f64::max);
+    let floor = zs(Segment::FootL).chain(zs(Segment::FootR)).fold(f64::MAX, f64::min);
+    row("body", "stature", m.stature, top - floor);
+    row("pelvis", "inseam", m.inseam, zs(Segment::Pelvis).fold(f64::MAX, f64::min) - floor);
+    let sk = &body.skeleton;
+    row("arm_l", "arm_length", m.arm_length, (sk.centre(Joint::ElbowL) - sk.centre(Joint::ShoulderL)).norm() + (sk.centre(Joint::WristL) - sk.centre(Joint::ElbowL)).norm());
+    for (name, p) in &poses {
+        let path = out.join(format!("{name}.obj"));
+        mannequin::obj::write_obj(&path, &body, &body.placements(p), name)?;
+        say!("wrote {}", path.display());
+    }
+    Ok(())
 }
 
 /// A length unit from its symbol.

@@ -26,15 +26,26 @@
 //! regularisation, `friction_slip` × d̂). On commit a sliding pair's anchor is dragged to
 //! trail the node (return mapping), so the law is path-dependent across steps. With λ̄ and n̄
 //! lagged, D is a potential and its Hessian is symmetric and exact.
+//!
+//! Moving bodies (`motion`, [`super::motion`]): each attempt places the bodies at its end
+//! time ([`NodalForces::begin_motion`]); distances, barrier and friction are evaluated at
+//! that placement. The body's own displacement over the attempt is seen by conservative
+//! advancement on the relative motion (node still, body interpolated from its committed to
+//! its trial placement): nodes it would sweep over, and nodes in the barrier zone, start the
+//! iteration carried rigidly with the body, so the initial iterate is intersection-free;
+//! Newton's own collision bound then works with the body at rest at its trial placement.
+//! Friction anchors and lagged normals are stored in the body frame, so the slip is measured
+//! relative to the body's surface and a moving body carries the cloth by friction.
 
 use std::time::Instant;
 
-use nalgebra::{Matrix3, SymmetricEigen, Vector3};
+use nalgebra::{Isometry3, Matrix3, SymmetricEigen, Vector3};
 use rayon::prelude::*;
 use serde::Serialize;
 
 use super::body::RigidBody;
 use super::ccd::conservative_advancement;
+use super::motion;
 use super::mechanics::distance_hessian;
 use crate::element::NODE_DOFS;
 use crate::model::{Model, State};
@@ -86,13 +97,15 @@ pub fn barrier(d: f64, dhat: f64) -> (f64, f64, f64) {
     (-e * e * l, -2.0 * e * l - e * e / d, -2.0 * l - 4.0 * e / d + e * e / (d * d))
 }
 
-/// Committed state of one node–body pair.
+/// Committed state of one node–body pair. Normal and anchor are in the body's local frame,
+/// so that they move with a moving body (friction acts on the slip relative to its surface).
 #[derive(Clone, Copy, Debug, Default)]
 struct PairHistory {
     /// Barrier force λ̄ = −κ b'(d) of the last converged state (0: not in the barrier zone).
     force: f64,
-    /// Body normal there (lagged tangent plane).
+    /// Body normal there (lagged tangent plane), body frame.
     normal: Vector3<f64>,
+    /// Where the pair sticks, body frame.
     anchor: Option<Vector3<f64>>,
     sliding: bool,
     slip: f64,
@@ -128,6 +141,30 @@ pub struct BarrierIncrement {
     pub potential: f64,
     /// Nodes whose barrier stiffness was doubled at this state (gap below 5 % of d̂).
     pub stiffened: usize,
+    /// Placement of each moving body at this state (empty when no body moves).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub bodies: Vec<BodyPlacement>,
+    /// Nodes carried with a moving body at the start of this increment (their relative
+    /// motion would have closed the gap, or they were in contact).
+    #[serde(skip_serializing_if = "is_zero")]
+    pub carried: usize,
+}
+
+fn is_zero(n: &usize) -> bool {
+    *n == 0
+}
+
+/// Placement of a moving body at a converged state.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct BodyPlacement {
+    /// Body name.
+    pub name: String,
+    /// Analysis time (`contact::motion`).
+    pub time: f64,
+    /// Translation of the body's local origin (m).
+    pub translation: [f64; 3],
+    /// Rotation vector of its orientation (axis × angle, degrees).
+    pub rotation: [f64; 3],
 }
 
 /// Barrier contact of a model's shell nodes with rigid bodies.
@@ -151,6 +188,15 @@ pub struct BarrierContact {
     last: Vec<PairEval>,
     last_potential: f64,
     search_s: f64,
+    /// Body placements at the last converged state (`bodies[b].pose` is the trial one).
+    committed_pose: Vec<Isometry3<f64>>,
+    /// Per participating node: whether it may be carried by a moving body in the initial
+    /// iterate (all three translations free equations and not a tie master).
+    carriable: Vec<bool>,
+    /// Analysis time of the trial placement.
+    time: f64,
+    /// Nodes carried at the start of the current attempt.
+    carried: usize,
     /// Per-converged-state reports.
     pub increments: Vec<BarrierIncrement>,
 }
@@ -208,7 +254,19 @@ impl BarrierContact {
             })
             .collect();
         let np = nodes.len() * bodies.len();
+        let mut master = vec![false; n];
+        for tie in &model.dofs.ties {
+            for &(g, _) in &tie.masters {
+                master[g / NODE_DOFS] = true;
+            }
+        }
+        let carriable =
+            nodes.iter().map(|&a| !master[a] && (0..3).all(|k| model.dofs.eq[NODE_DOFS * a + k] != crate::model::FIXED)).collect();
         Self {
+            committed_pose: bodies.iter().map(|b| b.pose).collect(),
+            carriable,
+            time: 0.0,
+            carried: 0,
             offset: nodes.iter().map(|&a| 0.5 * thick[a]).collect(),
             area: nodes.iter().map(|&a| area[a]).collect(),
             committed_x: nodes.iter().map(|&a| model.x0[a]).collect(),
@@ -279,11 +337,13 @@ impl BarrierContact {
                             evals[b] = PairEval { gap: g, force: -kap * b1, normal: n, active: true, ..Default::default() };
                         }
                     }
-                    // Lagged friction: pairs with a normal force in the last converged state.
+                    // Lagged friction: pairs with a normal force in the last converged state;
+                    // anchor and tangent plane ride on the body (slip relative to its surface).
                     let mu = if hist.sliding { body.mu_kinetic } else { body.mu_static };
                     if mu > 0.0 && hist.force > 0.0 {
-                        let anchor = hist.anchor.unwrap_or(self.committed_x[i]);
-                        let nf = hist.normal;
+                        let local = hist.anchor.unwrap_or_else(|| self.committed_pose[b].inverse_transform_point(&self.committed_x[i].into()).coords);
+                        let anchor = body.pose.transform_point(&local.into()).coords;
+                        let nf = body.pose.transform_vector(&hist.normal);
                         let p = Matrix3::identity() - nf * nf.transpose();
                         let s = p * (x - anchor);
                         let sn = s.norm();
@@ -352,6 +412,77 @@ impl NodalForces for BarrierContact {
         Some(self.last_potential)
     }
 
+    /// Places the moving bodies at analysis time `to` and carries with them (rigidly, from
+    /// their committed to their trial placement) every free node of the initial iterate whose
+    /// relative motion — the node at rest, the body moving along [`motion::interpolate`] —
+    /// would close its gap by more than `CCD_CLOSE` (conservative advancement on the
+    /// relative motion, [`motion::relative_rate`]) or that lies in the barrier zone (it
+    /// rides along, like cloth on a lifting hand). A carried node keeps its body-frame
+    /// coordinates, hence its gap; its director frame turns with the body when its
+    /// rotations are free. A node that the carry would put into another body stays.
+    /// Newton then minimises with the bodies at their trial placement; its own collision
+    /// bound ([`NodalForces::max_step`]) sees them still.
+    fn begin_motion(&mut self, model: &Model, _from: f64, to: f64, state: &mut State) {
+        self.time = to;
+        self.carried = 0;
+        let mut moving = Vec::new();
+        for (b, body) in self.bodies.iter_mut().enumerate() {
+            if body.motion.is_some() {
+                body.pose = body.placement_at(to);
+                if body.pose != self.committed_pose[b] {
+                    moving.push(b);
+                }
+            }
+        }
+        if moving.is_empty() {
+            return;
+        }
+        let carry: Vec<Option<(usize, Isometry3<f64>)>> = (0..self.nodes.len())
+            .into_par_iter()
+            .map(|i| {
+                if !self.carriable[i] {
+                    return None;
+                }
+                let a = self.nodes[i];
+                let x = model.x0[a] + state.u[a];
+                let (r, dh) = (self.offset[i], self.dhat[i]);
+                for &b in &moving {
+                    let body = &self.bodies[b];
+                    let (pc, pt) = (self.committed_pose[b], body.pose);
+                    let ell = motion::relative_rate(&pc, &pt, &x, &Vector3::zeros());
+                    let Some(p) = body.proximity_at(&pc, &x, r + dh + ell) else { continue };
+                    let g0 = p.distance - r;
+                    let hit = g0 < dh
+                        || conservative_advancement(g0, ell, CCD_CLOSE, 50, |s| {
+                            body.proximity_at(&motion::interpolate(&pc, &pt, s), &x, r + ell).map(|q| q.distance - r)
+                        }) < 1.0;
+                    if hit {
+                        let m = pt * pc.inverse();
+                        let y = m.transform_point(&x.into()).coords;
+                        let clear = self.bodies.iter().enumerate().all(|(c, o)| c == b || o.proximity(&y, r).is_none_or(|q| q.distance - r > 0.0));
+                        return clear.then_some((b, m));
+                    }
+                }
+                None
+            })
+            .collect();
+        for (i, c) in carry.into_iter().enumerate() {
+            let Some((_, m)) = c else { continue };
+            let a = self.nodes[i];
+            let x = model.x0[a] + state.u[a];
+            state.u[a] = m.transform_point(&x.into()).coords - model.x0[a];
+            if (3..5).all(|k| model.dofs.eq[NODE_DOFS * a + k] != crate::model::FIXED) {
+                let f = &mut state.frames[a];
+                (f.d, f.t1, f.t2) = (m.rotation * f.d, m.rotation * f.t1, m.rotation * f.t2);
+            }
+            self.carried += 1;
+        }
+    }
+
+    fn motion_end(&self) -> f64 {
+        self.bodies.iter().filter_map(|b| b.motion.as_ref()).map(|m| m.end_time()).fold(f64::NEG_INFINITY, f64::max)
+    }
+
     fn is_barrier(&self) -> bool {
         true
     }
@@ -409,20 +540,24 @@ impl NodalForces for BarrierContact {
                     rep.normal_force += ev.force;
                     rep.min_gap = rep.min_gap.min(ev.gap);
                     rep.min_gap_ratio = rep.min_gap_ratio.min(ev.gap / self.dhat[i]);
-                    let anchor = h.anchor.unwrap_or(self.committed_x[i]);
+                    // Anchors live in the body frame: from the committed placement of the last
+                    // state to the body's placement now (`pose`, committed below).
+                    let pose = &self.bodies[b].pose;
+                    let local = h.anchor.unwrap_or_else(|| self.committed_pose[b].inverse_transform_point(&self.committed_x[i].into()).coords);
+                    let anchor = pose.transform_point(&local.into()).coords;
                     if ev.sliding {
                         rep.sliding += 1;
                         let t = ev.tangential.norm();
                         let lag = SLIDE_ARG * self.friction_slip * self.dhat[i];
                         let new_anchor = if t > 0.0 { x + ev.tangential * (lag / t) } else { x };
                         h.slip += (new_anchor - anchor).norm();
-                        h.anchor = Some(new_anchor);
+                        h.anchor = Some(pose.inverse_transform_point(&new_anchor.into()).coords);
                     } else {
-                        h.anchor = Some(anchor);
+                        h.anchor = Some(local);
                     }
                     h.sliding = ev.sliding;
                     h.force = ev.force;
-                    h.normal = ev.normal;
+                    h.normal = pose.inverse_transform_vector(&ev.normal);
                 } else {
                     *h = PairHistory { slip: h.slip, ..Default::default() };
                 }
@@ -442,6 +577,14 @@ impl NodalForces for BarrierContact {
             rep.min_gap = 0.0;
         }
         rep.resultant = [resultant.x, resultant.y, resultant.z];
+        for (b, body) in self.bodies.iter().enumerate() {
+            self.committed_pose[b] = body.pose;
+            if body.motion.is_some() {
+                let (t, r) = (body.pose.translation.vector, body.pose.rotation.scaled_axis().map(f64::to_degrees));
+                rep.bodies.push(BodyPlacement { name: body.name.clone(), time: self.time, translation: [t.x, t.y, t.z], rotation: [r.x, r.y, r.z] });
+            }
+        }
+        rep.carried = self.carried;
         self.increments.push(rep.clone());
         serde_json::to_value(serde_json::json!({ "contact": rep })).ok()
     }

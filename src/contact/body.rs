@@ -8,6 +8,7 @@ use parry3d_f64::math::Vector as PVec;
 use parry3d_f64::query::PointQuery;
 use parry3d_f64::shape::{Ball, Capsule, Cuboid, Cylinder, TriMesh, TriMeshFlags};
 
+use super::motion::Motion;
 use super::trimesh_io::TriSoup;
 
 /// The geometry of a rigid body in its local frame. Cylinder and capsule axes are the local
@@ -87,13 +88,36 @@ pub struct RigidBody {
     /// Edge rounding radius: the body is the shape (already shrunk by it) swept by a ball of
     /// this radius, so its signed distance is the shape's minus the radius.
     pub rounding: f64,
+    /// Prescribed motion, if any: the placement at analysis time t is `motion.at(t) · base`
+    /// ([`super::motion`]); `pose` is then the placement the contact currently uses.
+    pub motion: Option<Arc<Motion>>,
+    /// The placement from the scene's `translation` and `rotation` (before any motion).
+    pub base: Isometry3<f64>,
 }
 
 impl RigidBody {
+    /// The body's placement at analysis time `t` (its fixed pose when it has no motion).
+    pub fn placement_at(&self, t: f64) -> Isometry3<f64> {
+        match &self.motion {
+            Some(m) => m.at(t) * self.base,
+            None => self.pose,
+        }
+    }
+
+    /// A copy of the body placed where it is at analysis time `t`.
+    pub fn at_time(&self, t: f64) -> RigidBody {
+        RigidBody { pose: self.placement_at(t), ..self.clone() }
+    }
+
     /// Signed distance, closest point and outward normal at global point `x`, or None when
     /// the surface is farther than `max_dist` (bounded BVH search for meshes).
     pub fn proximity(&self, x: &Vector3<f64>, max_dist: f64) -> Option<Proximity> {
-        let xl = self.pose.inverse_transform_point(&(*x).into()).coords;
+        self.proximity_at(&self.pose, x, max_dist)
+    }
+
+    /// [`RigidBody::proximity`] with the body at placement `pose` instead of its own.
+    pub fn proximity_at(&self, pose: &Isometry3<f64>, x: &Vector3<f64>, max_dist: f64) -> Option<Proximity> {
+        let xl = pose.inverse_transform_point(&(*x).into()).coords;
         // Cylinder and capsule axes: parry's y → our z (rotate (x, y, z) → (x, z, −y)...).
         let to_y = |v: &Vector3<f64>| Vector3::new(v.x, v.z, -v.y);
         let from_y = |v: &Vector3<f64>| Vector3::new(v.x, -v.z, v.y);
@@ -125,8 +149,8 @@ impl RigidBody {
         }
         Some(Proximity {
             distance: dist,
-            point: self.pose.transform_point(&pl.into()).coords,
-            normal: self.pose.transform_vector(&nl),
+            point: pose.transform_point(&pl.into()).coords,
+            normal: pose.transform_vector(&nl),
         })
     }
 }

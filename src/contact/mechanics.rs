@@ -2,6 +2,9 @@
 //! friction, evaluated per shell node against every body (Wriggers, *Computational
 //! Contact Mechanics*, 2nd ed. 2006, §5.2 and §10.3; Laursen 2002, ch. 5).
 //!
+//! The bodies stand still: a body with a prescribed `motion` is refused at scene build
+//! (`contact.bodies[..].motion`) unless the contact is the barrier (`barrier.rs`).
+//!
 //! Gap of node a with body b: g = d_b(x_a) − h_a/2, with d_b the body's signed distance
 //! (parry3d closest-point query, bounded by the half-thickness) and h_a the largest
 //! thickness of the sections around the node (the shell's face, not its mid-surface,

@@ -9,6 +9,7 @@ pub mod interply;
 pub mod intersection;
 pub mod ipc;
 pub mod mechanics;
+pub mod motion;
 pub mod stabilize;
 pub mod trimesh_io;
 
@@ -24,6 +25,7 @@ pub use mechanics::{ContactIncrement, ContactSet, ContactSettings};
 pub use stabilize::Stabilization;
 
 use crate::model::PartInfo;
+use trimesh_io::TriSoup;
 use crate::scene::{ContactSpec, Locator, SceneError, ShapeSpec};
 
 /// Rigid bodies, the participating parts and the contact controls of a scene.
@@ -59,32 +61,34 @@ pub fn build_contact(spec: &ContactSpec, loc: &Locator, base_dir: &Path, parts: 
         if rounding > 0.0 && !matches!(b.shape, ShapeSpec::Box { .. } | ShapeSpec::Cylinder { .. }) {
             return Err(bad("rounding", "rounding applies to Box and Cylinder bodies only".into()));
         }
-        let shape = match &b.shape {
-            ShapeSpec::Plane => Shape::Plane,
+        // The shapes of this body: (name, shape, placement relative to the body's placement).
+        let single = |shape: Shape| vec![(b.name.clone(), shape, Isometry3::identity())];
+        let shapes = match &b.shape {
+            ShapeSpec::Plane => single(Shape::Plane),
             ShapeSpec::Sphere { radius } => {
                 if !pos(*radius) {
                     return Err(bad("radius", format!("expected a positive radius, found {radius}")));
                 }
-                Shape::Sphere(Ball::new(*radius))
+                single(Shape::Sphere(Ball::new(*radius)))
             }
             ShapeSpec::Box { half_extents } => {
                 if !half_extents.iter().all(|&h| h.is_finite() && h > rounding) {
                     return Err(bad("half_extents", format!("expected half extents larger than the rounding {rounding}, found {half_extents:?}")));
                 }
                 let r = rounding;
-                Shape::Box(Cuboid::new(PVec::new(half_extents[0] - r, half_extents[1] - r, half_extents[2] - r)))
+                single(Shape::Box(Cuboid::new(PVec::new(half_extents[0] - r, half_extents[1] - r, half_extents[2] - r))))
             }
             ShapeSpec::Cylinder { radius, height } => {
                 if !(radius.is_finite() && height.is_finite() && *radius > rounding && 0.5 * height > rounding) {
                     return Err(bad("radius", format!("expected a radius and half height larger than the rounding {rounding}, found {radius}, {height}")));
                 }
-                Shape::Cylinder(Cylinder::new(0.5 * height - rounding, radius - rounding))
+                single(Shape::Cylinder(Cylinder::new(0.5 * height - rounding, radius - rounding)))
             }
             ShapeSpec::Capsule { radius, height } => {
                 if !pos(*radius) || !pos(*height) {
                     return Err(bad("radius", format!("expected a positive radius and height, found {radius}, {height}")));
                 }
-                Shape::Capsule(Capsule::new_y(0.5 * height, *radius))
+                single(Shape::Capsule(Capsule::new_y(0.5 * height, *radius)))
             }
             ShapeSpec::TriMesh { path, scale } => {
                 if !pos(*scale) {
@@ -94,8 +98,9 @@ pub fn build_contact(spec: &ContactSpec, loc: &Locator, base_dir: &Path, parts: 
                 let (mut soup, w) = trimesh_io::read_trimesh(&full).map_err(|e| bad("path", format!("triangle mesh rejected: {e}")))?;
                 soup.vertices.iter_mut().for_each(|v| *v *= *scale);
                 warnings.extend(w.into_iter().map(|m| format!("{}: {m}", full.display())));
-                Shape::mesh(&soup).map_err(|e| bad("path", format!("{}: {e}", full.display())))?
+                single(Shape::mesh(&soup).map_err(|e| bad("path", format!("{}: {e}", full.display())))?)
             }
+            ShapeSpec::Mannequin { measurements, pose } => mannequin_shapes(&b.name, base_dir, measurements, pose.as_deref(), &bad)?,
         };
         if !(b.friction.is_finite() && b.friction >= 0.0) {
             return Err(bad("friction", format!("expected a non-negative friction coefficient, found {}", b.friction)));
@@ -112,7 +117,29 @@ pub fn build_contact(spec: &ContactSpec, loc: &Locator, base_dir: &Path, parts: 
         if spec.bodies[..bi].iter().any(|o| o.name == b.name) {
             return Err(loc.at(Some(&b.name), None, field, "duplicate body name"));
         }
-        bodies.push(RigidBody { name: b.name.clone(), shape, pose, mu_static: b.friction, mu_kinetic: kinetic, rounding });
+        let motion = if b.motion.is_empty() {
+            None
+        } else {
+            if matches!(spec.formulation, crate::scene::ContactFormulation::AugmentedLagrangian) {
+                return Err(bad(
+                    "motion",
+                    "a moving body needs barrier contact (formulation: Barrier()); the augmented-Lagrangian penalty contact holds bodies still".into(),
+                ));
+            }
+            let keys: Vec<_> = b.motion.iter().map(|k| (k.time, k.translation, k.rotation)).collect();
+            let m = motion::Motion::new(&keys).map_err(|(k, msg)| {
+                let t = b.motion[k].time;
+                loc.at(Some(&b.name), Some("motion"), format!("{field}.motion[{k}]"), format!("keyframe {k} (time {t}): {msg}"))
+            })?;
+            Some(std::sync::Arc::new(m))
+        };
+        for (name, shape, local) in shapes {
+            // A segment of a composite body (mannequin) sits at `local` in the body's frame;
+            // a motion moves the whole body.
+            let base = pose * local;
+            let placed = motion.as_ref().map_or(base, |m| m.at(0.0) * base);
+            bodies.push(RigidBody { name, shape, pose: placed, mu_static: b.friction, mu_kinetic: kinetic, rounding, motion: motion.clone(), base });
+        }
     }
     let mut part_ids = Vec::new();
     for p in &spec.parts {
@@ -153,6 +180,34 @@ pub fn build_contact(spec: &ContactSpec, loc: &Locator, base_dir: &Path, parts: 
         stabilization: spec.stabilization,
         warnings,
     })
+}
+
+/// The segments of a mannequin body as triangle-mesh shapes named `NAME.SEGMENT`, each with
+/// its placement in the pose (local → body frame). A file that cannot be read is an error
+/// at the body's `measurements` or `pose` field; an error inside a file names that file.
+fn mannequin_shapes(
+    name: &str,
+    base_dir: &Path,
+    measurements: &str,
+    pose: Option<&str>,
+    bad: &dyn Fn(&str, String) -> SceneError,
+) -> Result<Vec<(String, Shape, Isometry3<f64>)>, SceneError> {
+    use crate::mannequin::{self, Mannequin};
+    let located = |key: &str, e: SceneError| if e.line == 0 && e.field == "file" { bad(key, format!("{}: {}", e.file, e.message)) } else { e };
+    let m = mannequin::load_measurements(&base_dir.join(measurements)).map_err(|e| located("measurements", e))?;
+    let pose = match pose {
+        Some(p) => mannequin::load_pose(&base_dir.join(p)).map_err(|e| located("pose", e))?,
+        None => mannequin::Pose::default(),
+    };
+    let body = Mannequin::new(&m);
+    let placements = body.placements(&pose);
+    let mut out = Vec::with_capacity(body.segments.len());
+    for (seg, place) in body.segments.iter().zip(placements) {
+        let soup = TriSoup { vertices: seg.surface.vertices.iter().map(|v| v.coords).collect(), triangles: seg.surface.triangles.clone() };
+        let shape = Shape::mesh(&soup).map_err(|e| bad("measurements", format!("segment {}: {e}", seg.segment.name())))?;
+        out.push((format!("{name}.{}", seg.segment.name()), shape, place));
+    }
+    Ok(out)
 }
 
 /// Adds the contact and stabilization terms of `setup` to `solver` (drape falls and settles
@@ -200,12 +255,14 @@ pub fn max_penetration(model: &crate::model::Model, state: &crate::model::State,
         .reduce(|| 0.0, f64::max)
 }
 
-/// Writes the contact, stabilization and drape sections of summary.json into `extra`.
+/// Writes the contact, stabilization and drape sections of summary.json into `extra`;
+/// `time` is the analysis time of `state` (moving bodies are placed there, `motion`).
 pub fn summarize(
     scene: &crate::scene::Scene,
     setup: &ContactSetup,
     model: &crate::model::Model,
     state: &crate::model::State,
+    time: f64,
     contributions: &[Box<dyn crate::solver::NodalForces + '_>],
     extra: &mut std::collections::BTreeMap<String, serde_json::Value>,
 ) {
@@ -219,7 +276,8 @@ pub fn summarize(
     }
     if let Some(d) = &scene.drape {
         let res = d.resolution.unwrap_or(d.specimen_radius / 1000.0);
-        let pen = max_penetration(model, state, &setup.bodies);
+        let placed: Vec<RigidBody> = setup.bodies.iter().map(|b| b.at_time(time)).collect();
+        let pen = max_penetration(model, state, &placed);
         let rep = drape::drape_report(model, state, &Vector3::from(d.center), d.disc_radius, d.specimen_radius, res, pen);
         if let Ok(v) = serde_json::to_value(rep) {
             extra.insert("drape".into(), v);

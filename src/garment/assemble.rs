@@ -255,7 +255,9 @@ impl GarmentMesh {
                 let part_b = self.part_of(pb, k).ok_or_else(|| err("missing ply".into()))?;
                 let part_a = self.part_of(pa, k.min(na - 1)).ok_or_else(|| err("missing ply".into()))?;
                 let name = if nb == 1 { s.name.clone() } else { format!("{}/{}", s.name, spec.panels[pb].plies[k]) };
-                let (t, info) = seam_ties(&name, s.kind, x0, frames0, &global(part_a, &row_a), &global(part_b, &row_b), closing).map_err(err)?;
+                let (mut t, mut info) = seam_ties(&name, s.kind, x0, frames0, &global(part_a, &row_a), &global(part_b, &row_b), closing).map_err(err)?;
+                super::seam::make_compliant(&mut t, &mut info, s.stiffness, s.strength, closing.is_some())
+                    .map_err(|(key, msg)| loc.at(Some(&s.name), Some(key), format!("{field}.{key}"), msg))?;
                 ties.extend(t);
                 infos.push(info);
             }

@@ -77,7 +77,9 @@ pub fn garment_surface(model: &Model, layout: &GarmentLayout, position: impl Fn(
 }
 
 /// Writes the garment VTU. With `state`, points are the deformed positions and seam lines
-/// carry `seam_force_per_length` from the all-DOF internal and external forces `forces`;
+/// carry `seam_force_per_length` (the springs' for compliant seams, else from the all-DOF
+/// internal and external forces `forces`), `seam_utilisation` (force per length / strength,
+/// 0 without a strength) and `seam_opening` (m; `compliant::seam_points`);
 /// without, the flat pattern layout is written (seams as lines between the flat spans,
 /// forces zero). Cell data: `panel`, `ply`, `material`, `part`, `seam` (−1 where it does
 /// not apply; ply and material −1 on a laminated panel), `ply_mask` (bit i: the cell stands
@@ -107,12 +109,18 @@ pub fn write_garment_vtu(
     let mut lines = Vec::new();
     let mut seam_id = Vec::new();
     let mut line_force: Vec<Vector3<f64>> = Vec::new();
+    let (mut line_util, mut line_open) = (Vec::new(), Vec::new());
     for (si, s) in seams.iter().enumerate() {
-        let f = forces.map(|(fi, fe)| s.line_forces(fi, fe)).unwrap_or_else(|| vec![Vector3::zeros(); s.slave.len()]);
+        let pts = match state {
+            Some(st) => super::compliant::seam_points(s, |n| model.position(st, n), forces),
+            None => vec![super::compliant::SeamPoint::default(); s.slave.len()],
+        };
         for k in 0..s.slave.len().saturating_sub(1) {
             lines.push([s.slave[k], s.slave[k + 1]]);
             seam_id.push(si as i32);
-            line_force.push((f[k] + f[k + 1]) * 0.5);
+            line_force.push((pts[k].force + pts[k + 1].force) * 0.5);
+            line_util.push(0.5 * (pts[k].utilisation + pts[k + 1].utilisation));
+            line_open.push(0.5 * (pts[k].opening + pts[k + 1].opening));
         }
     }
     let tag = |e: usize, k: usize| -> i32 { layout.and_then(|l| l.part_tags.get(model.elements[e].part)).map_or(-1, |t| t[k]) };
@@ -124,6 +132,8 @@ pub fn write_garment_vtu(
     let ply_mask: Vec<i32> = model.elements.iter().map(|e| mask_of(e.part)).chain(std::iter::repeat_n(0, lines.len())).collect();
     let seam: Vec<i32> = std::iter::repeat_n(-1, n_q).chain(seam_id).collect();
     let force: Vec<f64> = std::iter::repeat_n(0.0, 3 * n_q).chain(line_force.iter().flat_map(|f| [f.x, f.y, f.z])).collect();
+    let utilisation: Vec<f64> = std::iter::repeat_n(0.0, n_q).chain(line_util).collect();
+    let opening: Vec<f64> = std::iter::repeat_n(0.0, n_q).chain(line_open).collect();
     let displacement: Vec<f64> = (0..model.n_nodes())
         .flat_map(|n| {
             let u = state.map_or(Vector3::zeros(), |s| s.u[n]);
@@ -135,7 +145,11 @@ pub fn write_garment_vtu(
         quads: &quads,
         lines: &lines,
         point_data: vec![DataArray { name: "displacement", components: 3, values: &displacement }],
-        cell_data: vec![DataArray { name: "seam_force_per_length", components: 3, values: &force }],
+        cell_data: vec![
+            DataArray { name: "seam_force_per_length", components: 3, values: &force },
+            DataArray { name: "seam_utilisation", components: 1, values: &utilisation },
+            DataArray { name: "seam_opening", components: 1, values: &opening },
+        ],
         int_cell_data: vec![("panel", int(0)), ("ply", int(1)), ("material", int(2)), ("part", part), ("seam", seam), ("ply_mask", ply_mask)],
         field_data: layout.map_or_else(Vec::new, |l| {
             vec![

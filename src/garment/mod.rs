@@ -1,6 +1,7 @@
 //! Garments: panels, plies and seams. Seams become master–slave ties in the shell model.
 
 pub mod assemble;
+pub mod compliant;
 pub mod export;
 pub mod graph;
 pub mod laminate;
@@ -59,7 +60,8 @@ pub fn build_scene_seams(
                 loc.at_value(&s.name, l, format!("{field}.closing"), format!("no load pattern named \"{l}\" (declare it as `\"{l}\": Closure` in loads)"))
             })?),
         };
-        let (t, info) = seam_ties(&s.name, s.kind, x0, frames0, master, slave, closing).map_err(|e| loc.at(Some(&s.name), None, field.clone(), e))?;
+        let (mut t, mut info) = seam_ties(&s.name, s.kind, x0, frames0, master, slave, closing).map_err(|e| loc.at(Some(&s.name), None, field.clone(), e))?;
+        seam::make_compliant(&mut t, &mut info, s.stiffness, s.strength, closing.is_some()).map_err(|(key, msg)| loc.at(Some(&s.name), Some(key), format!("{field}.{key}"), msg))?;
         ties.extend(t);
         infos.push(info);
     }

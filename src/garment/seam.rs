@@ -73,6 +73,13 @@ pub struct SeamInfo {
     pub tributary: Vec<f64>,
     /// Interpolation of each slave node on the master row: (master node, weight) pairs.
     pub weights: Vec<Vec<(usize, f64)>>,
+    /// Initial gap g₀ = x_s − Σ w x_m of each slave node (the rest offset of a compliant tie).
+    pub rest: Vec<Vector3<f64>>,
+    /// Stitch stiffness per length (N/m per metre of seam, i.e. N/m²): the translations are
+    /// joined by springs ([`super::compliant`]) instead of ties. None: rigid ties.
+    pub stiffness: Option<f64>,
+    /// Seam strength (N per metre of seam), for the utilisation; None: not given.
+    pub strength: Option<f64>,
 }
 
 /// Cumulative normalised arc length of a polyline through `row`.
@@ -222,9 +229,44 @@ pub fn seam_ties(
         master: master.to_vec(),
         slave: slave.to_vec(),
         tributary: tributary_lengths(x0, slave),
+        rest: slave.iter().zip(&weights).map(|(&s, w)| x0[s] - w.iter().map(|&(m, c)| x0[m] * c).sum::<Vector3<f64>>()).collect(),
         weights,
+        stiffness: None,
+        strength: None,
     };
     Ok((ties, info))
+}
+
+/// Makes a seam compliant and/or gives it a strength: with `stiffness` k (N/m², finite and
+/// positive) the translation ties of its slaves are removed from `ties` (the caller's ties
+/// of this seam) and the seam becomes springs of energy ½ k ℓ_i |x_s − Σ w x_m − g₀|²
+/// ([`super::compliant`]); `strength` (N/m, finite and positive) is recorded for the
+/// utilisation. A compliant seam cannot be sewn by a `closing` load. Errors name the key.
+pub fn make_compliant(
+    ties: &mut Vec<Tie>,
+    info: &mut SeamInfo,
+    stiffness: Option<f64>,
+    strength: Option<f64>,
+    closing: bool,
+) -> Result<(), (&'static str, String)> {
+    if let Some(k) = stiffness {
+        if !(k.is_finite() && k > 0.0) {
+            return Err(("stiffness", format!("expected a positive stitch stiffness per length (N/m²), found {k}")));
+        }
+        if closing {
+            return Err(("stiffness", "a compliant seam (stiffness) cannot be sewn by a closing load yet; drop one of them".into()));
+        }
+        let slaves: std::collections::HashSet<usize> = info.slave.iter().flat_map(|&s| (0..3).map(move |k| NODE_DOFS * s + k)).collect();
+        ties.retain(|t| !slaves.contains(&t.slave));
+        info.stiffness = Some(k);
+    }
+    if let Some(f) = strength {
+        if !(f.is_finite() && f > 0.0) {
+            return Err(("strength", format!("expected a positive seam strength (N/m), found {f}")));
+        }
+        info.strength = Some(f);
+    }
+    Ok(())
 }
 
 /// Ties of a rigid link from master node `m` to slave node `s` (e.g. two plies of a stack

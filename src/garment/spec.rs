@@ -277,6 +277,14 @@ pub struct GarmentSeamSpec {
     /// A `Closure` load pattern that sews the seam (drives the gap to zero).
     #[serde(default)]
     pub closing: Option<String>,
+    /// Stitch stiffness per length (N/m per metre of seam = N/m²): a compliant seam of
+    /// springs instead of rigid translation ties (`garment::compliant`).
+    #[serde(default)]
+    pub stiffness: Option<f64>,
+    /// Seam strength (N per metre of seam, as from a seam strength test): utilisation =
+    /// force per length / strength in the results.
+    #[serde(default)]
+    pub strength: Option<f64>,
 }
 
 /// A quilting line: the plies of `panel` are tied through the thickness along it.

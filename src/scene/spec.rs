@@ -99,6 +99,14 @@ pub struct SeamSpec {
     /// (virtual sewing); without it the initial gap is kept.
     #[serde(default)]
     pub closing: Option<String>,
+    /// Stitch stiffness per length (N/m per metre of seam = N/m²): a compliant seam of
+    /// springs instead of rigid translation ties (`garment::compliant`).
+    #[serde(default)]
+    pub stiffness: Option<f64>,
+    /// Seam strength (N per metre of seam, as from a seam strength test): utilisation =
+    /// force per length / strength in the results.
+    #[serde(default)]
+    pub strength: Option<f64>,
 }
 
 
@@ -176,6 +184,31 @@ pub struct BodySpec {
     /// Edge rounding radius of a box or cylinder (its outer dimensions are kept).
     #[serde(default)]
     pub rounding: f64,
+    /// Prescribed rigid motion (barrier contact only): keyframes in increasing time; the
+    /// body's placement at time t is the interpolated keyframe motion applied after the
+    /// placement above (`contact::motion`). Empty: the body stands still.
+    #[serde(default)]
+    pub motion: Vec<KeyframeSpec>,
+}
+
+/// One keyframe of a body's prescribed motion: at `time` the body is rotated by `rotation`
+/// (rotation vector, axis × angle in degrees, about the global origin) and then translated
+/// by `translation` from its placement given by the body's `translation` and `rotation`.
+/// Between keyframes translation is interpolated linearly and rotation spherically (slerp);
+/// before the first and after the last keyframe the body holds that keyframe's placement.
+/// Time is the analysis clock (`contact::motion`): physical time in `Dynamic` steps, the
+/// step's load fraction (one unit per step) in static steps.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct KeyframeSpec {
+    /// Analysis time of the keyframe.
+    pub time: f64,
+    /// Translation (m) after the rotation.
+    #[serde(default)]
+    pub translation: [f64; 3],
+    /// Rotation vector (axis × angle in degrees) about the global origin.
+    #[serde(default)]
+    pub rotation: [f64; 3],
 }
 
 /// Rigid-body shapes. Cylinder and capsule axes are the local z axis; the plane is z = 0
@@ -190,6 +223,17 @@ pub enum ShapeSpec {
     Capsule { radius: f64, height: f64 },
     /// Triangle mesh from OBJ or STL (ASCII or binary), path relative to the scene file.
     TriMesh { path: String, #[serde(default = "one")] scale: f64 },
+    /// The parametric mannequin (`src/mannequin/`): one triangle-mesh body per segment, named
+    /// `BODY.SEGMENT` (e.g. `body.torso`), placed by the pose (default: all joint angles zero,
+    /// standing on z = 0) and then by this body's translation and rotation. Paths relative to
+    /// the scene file.
+    Mannequin {
+        /// Measurements file (RON, ISO 8559-1 names).
+        measurements: String,
+        /// Pose file (RON, joint angles in degrees).
+        #[serde(default)]
+        pose: Option<String>,
+    },
 }
 
 /// Drape measures: the Cusick drape coefficient and fold count about a vertical axis

@@ -49,6 +49,7 @@ impl Solver<'_> {
         progress: &mut dyn FnMut(&Progress),
     ) -> Result<Vec<f64>, SolveError> {
         let at = |tau: f64| -> Vec<f64> { start.iter().zip(&step.target_scales).map(|(a, b)| a + tau * (b - a)).collect() };
+        let clock0 = self.clock;
         let mut tau = 0.0f64;
         let mut dtau = 1.0 / step.increments.max(1) as f64;
         let min_dtau = dtau * 0.25f64.powi(self.settings.max_cutbacks as i32);
@@ -68,6 +69,7 @@ impl Solver<'_> {
             }
             let mut report_progress = |it: usize, res: f64| progress(&Progress { step: si, fraction: next, iteration: it, residual: res });
             self.begin_nodal_increment((next - tau) * step.increments.max(1) as f64);
+            self.begin_nodal_motion(clock0 + next, state);
             match self.attempt(state, &trial_scales, false, true, &mut report_progress) {
                 Attempt::Converged { iterations: its, residuals, indefinite: ind, energy } => {
                     iterations += its;

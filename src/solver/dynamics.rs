@@ -505,10 +505,16 @@ impl<'m> Solver<'m> {
             if it == ds.max_iterations {
                 break;
             }
-            let t = Instant::now();
-            let mut kind = self.cholesky.factorize(&self.values);
-            self.timings.factorization += t.elapsed().as_secs_f64();
             let descent = incremental_potential && self.potential(state, scales, energy).is_some();
+            let t = Instant::now();
+            // A descent step replaces an indefinite tangent by the projected one: only whether
+            // K + c M is positive definite matters then, not its inertia (no LDLᵀ).
+            let mut kind = if descent {
+                if self.cholesky.factorize_definite(&self.values) { Ok(FactorKind::Llt) } else { Ok(FactorKind::Ldlt) }
+            } else {
+                self.cholesky.factorize(&self.values)
+            };
+            self.timings.factorization += t.elapsed().as_secs_f64();
             if descent && !matches!(kind, Ok(FactorKind::Llt)) {
                 // Indefinite: project the element Hessians for this iteration's direction.
                 self.assembler.project = true;
@@ -895,6 +901,9 @@ impl<'m> Solver<'m> {
                 }
             }
         }
+        let clock0 = self.clock;
+        // A step to rest does not end before the bodies' prescribed motion does.
+        let motion_end = self.motion_end() - clock0;
         let mut t = 0.0;
         let mut dt = ds.dt;
         let mut rejected = 0usize;
@@ -912,6 +921,7 @@ impl<'m> Solver<'m> {
             // Predictor: constant velocity would overshoot at rest; start from the last state.
             *state = prev.state.clone();
             self.begin_nodal_increment(dt / ds.dt);
+            self.begin_nodal_motion(clock0 + t + dt, state);
             let outcome = self.time_step(state, &prev, &mass, dt, ds, &scales, &mut report_progress);
             match outcome {
                 TimeStep::Converged { iterations: its, residuals, static_residual, energy, static_r } => {
@@ -929,7 +939,7 @@ impl<'m> Solver<'m> {
                     let work: f64 = (0..nn).map(|n| (0..3).map(|c| self.f_ext[NODE_DOFS * n + c] * state.u[n][c]).sum::<f64>()).sum();
                     let e_ref = energy.abs().max(work.abs()).max(1e-300);
                     t += dt;
-                    let still = t >= ds.ramp_time && ke <= ds.kinetic_tol * e_ref && static_residual <= ds.rest_residual_tol;
+                    let still = t >= ds.ramp_time && t >= motion_end && ke <= ds.kinetic_tol * e_ref && static_residual <= ds.rest_residual_tol;
                     // A saddle (e.g. a flat sheet past its wrinkling threshold) is no rest state:
                     // integration goes on and the unstable mode grows from round-off.
                     let mut at_rest = still && (!ds.require_stable || self.stable(state, &scales));

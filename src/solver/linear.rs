@@ -115,6 +115,36 @@ impl SparseCholesky {
         Ok(kind)
     }
 
+    /// LLᵀ factorization only: Ok(true) when the matrix is positive definite (the factor is
+    /// then ready for [`Cholesky::solve`]), Ok(false) when the factorization met a
+    /// non-positive pivot. No LDLᵀ fallback: for callers that replace an indefinite matrix
+    /// anyway (projected Newton), where the inertia of the rejected matrix is not needed.
+    pub fn factorize_definite(&mut self, values: &[f64]) -> bool {
+        if self.factored.as_deref() == Some(values) {
+            return self.kind == FactorKind::Llt;
+        }
+        let mut factored = self.factored.take().unwrap_or_default();
+        let a = SparseColMatRef::new(self.pattern.as_ref(), values);
+        let llt = self.symbolic.factorize_numeric_llt::<f64>(
+            &mut self.l_values,
+            a,
+            Side::Upper,
+            LltRegularization::default(),
+            self.par,
+            MemStack::new(&mut self.buffer),
+            Default::default(),
+        );
+        if llt.is_err() {
+            // The partial factor is garbage: nothing is cached.
+            return false;
+        }
+        self.kind = FactorKind::Llt;
+        factored.clear();
+        factored.extend_from_slice(values);
+        self.factored = Some(factored);
+        true
+    }
+
     fn factorize_numeric(&mut self, values: &[f64]) -> Result<FactorKind, LinearError> {
         let par = self.par;
         let a = SparseColMatRef::new(self.pattern.as_ref(), values);

@@ -226,6 +226,11 @@ pub struct Solver<'m> {
     /// Sum of the nodal-force terms' potentials at the last assembly (None: a term is not
     /// conservative).
     pub(super) nodal_potential: Option<f64>,
+    /// Analysis time of the last converged state (`contact::motion`: one unit per static
+    /// step, simulated time in `Dynamic` steps).
+    pub(super) clock: f64,
+    /// Analysis time at the end of the current attempt; becomes `clock` on commit.
+    pub(super) clock_trial: f64,
 }
 
 /// Largest director rotation of one Newton update in the energy line search (radians): a
@@ -268,6 +273,8 @@ impl<'m> Solver<'m> {
             extra_reports: Vec::new(),
             couplings: Vec::new(),
             nodal_potential: Some(0.0),
+            clock: 0.0,
+            clock_trial: 0.0,
         })
     }
 
@@ -319,9 +326,31 @@ impl<'m> Solver<'m> {
         }
     }
 
+    /// Tells the nodal-force terms that the current attempt ends at analysis time `to`
+    /// (from the last converged time): moving bodies place themselves there and may adjust
+    /// the initial iterate `state`.
+    pub(super) fn begin_nodal_motion(&mut self, to: f64, state: &mut State) {
+        self.clock_trial = to;
+        let from = self.clock;
+        for c in self.nodal_forces.iter_mut() {
+            c.begin_motion(self.model, from, to, state);
+        }
+    }
+
+    /// Analysis time of the last converged state (`contact::motion`).
+    pub fn clock(&self) -> f64 {
+        self.clock
+    }
+
+    /// Latest analysis time at which a nodal-force term still moves (−∞: none moves).
+    pub(super) fn motion_end(&self) -> f64 {
+        self.nodal_forces.iter().map(|c| c.motion_end()).fold(f64::NEG_INFINITY, f64::max)
+    }
+
     /// Tells the nodal-force terms that `state` has converged; keeps their reports for the
     /// next increment report.
     pub(super) fn commit_nodal_forces(&mut self, state: &State) {
+        self.clock = self.clock_trial;
         for c in self.nodal_forces.iter_mut() {
             if let Some(r) = c.commit(self.model, state) {
                 self.extra_reports.push(r);
@@ -747,6 +776,10 @@ impl<'m> Solver<'m> {
             let start = scales.clone();
             let n_inc = step.increments.max(1);
             tracker.new_step();
+            // The analysis clock at the start of the step; a step that does not move it
+            // itself (arc length, buckling) ends one unit later (`contact::motion`).
+            let clock0 = self.clock;
+            self.clock_trial = self.clock;
             match &step.kind {
                 StepKind::Static | StepKind::StaticDamped => {}
                 StepKind::Dynamic(ds) => {
@@ -763,12 +796,14 @@ impl<'m> Solver<'m> {
                         progress(&Progress { fraction: frac0 + p.fraction * (frac1 - frac0), ..p.clone() })
                     })?;
                     done_before += n_inc;
+                    (self.clock, self.clock_trial) = (clock0 + 1.0, clock0 + 1.0);
                     continue;
                 }
                 StepKind::Buckling { modes, shift } => {
                     let report = self.run_buckling(si, step, &start, state, *modes, *shift)?;
                     on_increment(&report, state, self);
                     done_before += n_inc;
+                    (self.clock, self.clock_trial) = (clock0 + 1.0, clock0 + 1.0);
                     continue;
                 }
             }
@@ -795,6 +830,7 @@ impl<'m> Solver<'m> {
                     let frac = (done_before as f64 + next * n_inc as f64) / total as f64;
                     let mut report_progress = |it: usize, res: f64| progress(&Progress { step: si, fraction: frac, iteration: it, residual: res });
                     self.begin_nodal_increment((next - tau) * n_inc as f64);
+                    self.begin_nodal_motion(clock0 + next, state);
                     let outcome = match step.kind {
                         StepKind::StaticDamped => self.attempt_damped(state, &trial_scales, &mut report_progress),
                         _ => self.attempt(state, &trial_scales, step.linear, false, &mut report_progress),

@@ -23,6 +23,19 @@ pub trait NodalForces: Send {
     fn begin_increment(&mut self, fraction: f64) {
         let _ = fraction;
     }
+    /// Called before each attempt (after [`NodalForces::begin_increment`]) with the analysis
+    /// times of the last converged state and of the attempt's end (`contact::motion` defines
+    /// the clock): a term with prescribed motion (moving contact bodies) places itself at
+    /// `to` and may move nodes of the initial iterate `state` so that it stays admissible
+    /// (e.g. carry the nodes a moving body would sweep over). Default: nothing.
+    fn begin_motion(&mut self, model: &Model, from: f64, to: f64, state: &mut State) {
+        let _ = (model, from, to, state);
+    }
+    /// Analysis time at which the term's prescribed motion ends (a `Dynamic` step does not
+    /// stop at rest before it). Default: −∞ (no motion).
+    fn motion_end(&self) -> f64 {
+        f64::NEG_INFINITY
+    }
     /// Called once per converged (sub-)increment or time step with the converged state, so
     /// the term can update its history; returns a report for the increment, if any.
     fn commit(&mut self, model: &Model, state: &State) -> Option<serde_json::Value> {

@@ -28,9 +28,11 @@ pub fn solve_on_bodies(sc: &Scene, built: &BuiltScene) -> (State, Vec<IncrementR
         .run(
             &built.steps,
             &mut state,
-            &mut |r, st, _| {
+            &mut |r, st, solver| {
                 reports.push(r.clone());
-                penetration = penetration.max(plyshell::contact::max_penetration(model, st, &setup.bodies));
+                // Bodies at their placement at this state (moving bodies: `contact::motion`).
+                let placed: Vec<_> = setup.bodies.iter().map(|b| b.at_time(solver.clock())).collect();
+                penetration = penetration.max(plyshell::contact::max_penetration(model, st, &placed));
                 if let Some(b) = surface {
                     overlaps += plyshell::contact::intersection::intersecting_prisms(model, st, &b.parts, 1.0 - b.settings.distance_factor).len();
                 }

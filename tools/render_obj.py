@@ -1,0 +1,95 @@
+#!/usr/bin/env python3
+"""Renders a triangle OBJ (e.g. from `plyshell body`) to a PNG with the standard library only:
+front (from +y, the way the body faces), right side (from +x) and oblique orthographic views, z up,
+flat Lambert shading with a z-buffer, one grey tone per OBJ object.
+
+Usage: render_obj.py MESH.obj OUT.png [PIXELS_PER_VIEW]
+"""
+import math
+import struct
+import sys
+import zlib
+
+
+def read_obj(path):
+    verts, tris, obj = [], [], 0
+    for line in open(path):
+        if line.startswith("v "):
+            verts.append(tuple(float(x) for x in line.split()[1:4]))
+        elif line.startswith("o "):
+            obj += 1
+        elif line.startswith("f "):
+            idx = [int(t.split("/")[0]) - 1 for t in line.split()[1:]]
+            for k in range(1, len(idx) - 1):
+                tris.append((idx[0], idx[k], idx[k + 1], obj))
+    return verts, tris
+
+
+def render(verts, tris, size, azim_deg):
+    a = math.radians(azim_deg)
+    # View direction d (from the viewer into the scene), screen axes r (right), z (up).
+    d = (-math.sin(a), -math.cos(a), 0.0)
+    r = (d[1], -d[0], 0.0)  # d × z
+    xs = [v[0] * r[0] + v[1] * r[1] for v in verts]
+    zs = [v[2] for v in verts]
+    depth = [v[0] * d[0] + v[1] * d[1] for v in verts]
+    lo_x, hi_x, lo_z, hi_z = min(xs), max(xs), min(zs), max(zs)
+    span = max(hi_x - lo_x, hi_z - lo_z) * 1.05
+    cx, cz = (lo_x + hi_x) / 2, (lo_z + hi_z) / 2
+    sx = [(x - cx) / span * size + size / 2 for x in xs]
+    sy = [size / 2 - (z - cz) / span * size for z in zs]
+    img = [[255] * size for _ in range(size)]
+    zbuf = [[math.inf] * size for _ in range(size)]
+    light = (-0.4 * d[0] + 0.3, -0.4 * d[1] + 0.2, 0.8)
+    ln = math.sqrt(sum(c * c for c in light))
+    for i, j, k, obj in tris:
+        p, q, s = verts[i], verts[j], verts[k]
+        u = [q[m] - p[m] for m in range(3)]
+        w = [s[m] - p[m] for m in range(3)]
+        n = (u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0])
+        nn = math.sqrt(sum(c * c for c in n)) or 1.0
+        if sum(n[m] * d[m] for m in range(3)) >= 0:
+            continue  # back face (outward normals)
+        shade = max(0.0, sum(n[m] * light[m] for m in range(3)) / nn / ln)
+        base = 150 + 40 * (obj % 3)
+        grey = int(40 + (base - 40) * (0.35 + 0.65 * shade))
+        ax, ay, bx, by, qx, qy = sx[i], sy[i], sx[j], sy[j], sx[k], sy[k]
+        area = (bx - ax) * (qy - ay) - (qx - ax) * (by - ay)
+        if area == 0:
+            continue
+        for py in range(max(0, int(min(ay, by, qy))), min(size, int(max(ay, by, qy)) + 1)):
+            for px in range(max(0, int(min(ax, bx, qx))), min(size, int(max(ax, bx, qx)) + 1)):
+                x, y = px + 0.5, py + 0.5
+                l1 = ((bx - x) * (qy - y) - (qx - x) * (by - y)) / area
+                l2 = ((qx - x) * (ay - y) - (ax - x) * (qy - y)) / area
+                l3 = 1 - l1 - l2
+                if l1 < 0 or l2 < 0 or l3 < 0:
+                    continue
+                z = l1 * depth[i] + l2 * depth[j] + l3 * depth[k]
+                if z < zbuf[py][px]:
+                    zbuf[py][px] = z
+                    img[py][px] = grey
+    return img
+
+
+def write_png(path, rows):
+    h, w = len(rows), len(rows[0])
+    raw = b"".join(b"\x00" + bytes(row) for row in rows)
+    def chunk(tag, data):
+        return struct.pack(">I", len(data)) + tag + data + struct.pack(">I", zlib.crc32(tag + data) & 0xFFFFFFFF)
+    png = b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, 0, 0, 0, 0))
+    png += chunk(b"IDAT", zlib.compress(raw, 9)) + chunk(b"IEND", b"")
+    open(path, "wb").write(png)
+
+
+def main():
+    src, out = sys.argv[1], sys.argv[2]
+    size = int(sys.argv[3]) if len(sys.argv) > 3 else 300
+    verts, tris = read_obj(src)
+    views = [render(verts, tris, size, a) for a in (0.0, 90.0, 35.0)]
+    rows = [sum((v[y] for v in views), []) for y in range(size)]
+    write_png(out, rows)
+
+
+if __name__ == "__main__":
+    main()
