@@ -589,3 +589,18 @@ fn a_garment_pattern_error_is_located_at_the_pattern_field() {
     assert!(e.message.contains("no piece of that name; its pieces: back"), "{e}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A linear step cannot run with a garment's barrier surface contact (on by default): the
+/// collision detection would shorten its one update. Refused at the step's `linear` key;
+/// accepted with the contact turned off.
+#[test]
+fn a_linear_step_with_garment_barrier_contact_is_refused() {
+    let text = garment_scene(PANEL, "0.1", "").replace("(name: \"none\", increments: 1)", "(name: \"none\", increments: 1, linear: true)");
+    let e = error_of(&text);
+    assert_eq!(e.field, "steps[none].linear", "{e}");
+    assert!(e.message.contains("interply: (enabled: false)"), "{e}");
+    assert_eq!(e.line, line_of(&text, "linear: true"), "{e}");
+    let off = text.replace("plies: {\"shell\"", "interply: (enabled: false),\n        plies: {\"shell\"");
+    let s = scene::parse("g.ron", &off).expect("parse");
+    scene::build(&s, "g.ron", &off).expect("linear with contact off builds");
+}

@@ -23,7 +23,7 @@ fn solve(text: &str) -> (BuiltScene, State, Vec<IncrementReport>) {
     let file = data_dir().join("barrier_scene.ron").display().to_string();
     let sc = scene::parse(&file, text).expect("parse");
     let built = scene::build(&sc, &file, text).expect("build");
-    let (state, reports, penetration) = common::solve_on_bodies(&sc, &built);
+    let (state, reports, penetration, _) = common::solve_on_bodies(&sc, &built);
     // −(largest penetration) is the smallest gap of a shell face to a body.
     let min_gap = -penetration;
     assert!(min_gap >= 0.0, "a shell face reached a body: gap {min_gap:e}");

@@ -1,6 +1,6 @@
 //! Inter-ply contact (issue 5, multi-ply must-show): three plies of a cantilevered strip
 //! under their own weight, unbonded (held apart only by inter-ply contact with friction
-//! μ = 0.3) and bonded at stitch lines.
+//! μ = 0.3: the default barrier formulation, `contact::ipc`) and bonded at stitch lines.
 //!
 //! References (Euler–Bernoulli cantilever under a uniform load q, tip deflection
 //! w = q L⁴ / (8 EI), Timoshenko & Gere; the composite-section argument of tests/plies.rs):
@@ -110,8 +110,11 @@ fn ply_penetration(model: &Model, state: &State, parts: &[usize]) -> f64 {
 
 struct Run {
     tip: f64,
-    /// Whether the scene had inter-ply contact.
+    /// Whether the scene had inter-ply contact: pairs of adjacent plies in contact (a single
+    /// shell, e.g. a laminate, may still have barrier self-contact, on by default).
     contact: bool,
+    /// Whether that contact is the barrier formulation (the default).
+    barrier: bool,
     /// Shell nodes of the model.
     nodes: usize,
     penetration: f64,
@@ -145,7 +148,8 @@ fn solve_scene(text: &str) -> Run {
     let parts: Vec<usize> = ["strip/top", "strip/mid", "strip/bot"].iter().filter_map(|n| model.parts.iter().position(|p| p.name == *n)).collect();
     Run {
         tip,
-        contact: built.interply.is_some(),
+        contact: built.interply.as_ref().is_some_and(|s| !s.ply_pairs.is_empty()),
+        barrier: built.interply.as_ref().is_some_and(|s| s.barrier.is_some()),
         nodes: model.n_nodes(),
         penetration: if parts.len() == 3 { ply_penetration(model, &state, &parts) } else { 0.0 },
         iterations,
@@ -186,9 +190,18 @@ fn stitching_stiffens_plies_that_contact_keeps_apart() {
     // the shell's shear and membrane effects), no ply through another (5 % of t).
     let free = solve(&[]);
     assert!(free.contact, "a multi-ply garment with interply enabled gets inter-ply contact");
+    assert!(free.barrier, "the default inter-ply contact is the barrier formulation");
     report("unbonded, inter-ply contact", &free, w_unbonded);
     assert!((-free.tip / w_unbonded - 1.0).abs() < 0.03, "unbonded tip {} vs {w_unbonded}", -free.tip);
     assert!(free.penetration < 0.05 * T, "ply penetration {} m", free.penetration);
+
+    // The node-to-surface penalty stays available as an explicit opt-in, with the same
+    // bounds (3 % on the tip, 5 % of t penetration).
+    let penalty = solve_scene(&cantilever(&[]).replace("interply: (enabled: true, friction: 0.3)", "interply: (enabled: true, friction: 0.3, formulation: Penalty)"));
+    assert!(penalty.contact && !penalty.barrier, "formulation: Penalty gives the penalty contact");
+    report("unbonded, penalty inter-ply contact (opt-in)", &penalty, w_unbonded);
+    assert!((-penalty.tip / w_unbonded - 1.0).abs() < 0.03, "unbonded penalty tip {} vs {w_unbonded}", -penalty.tip);
+    assert!(penalty.penetration < 0.05 * T, "penalty ply penetration {} m", penalty.penetration);
 
     // Stitched at every node column: the composite section (3 %).
     let all: Vec<f64> = (1..=20).map(|i| i as f64 * H).collect();
@@ -219,7 +232,8 @@ fn stitching_stiffens_plies_that_contact_keeps_apart() {
 /// the cylinder carries the strip's weight Σρ_k g A (static equilibrium, 2 %, as
 /// tests/sleeve_on_arm.rs). And no two triangles of the plies, thickened to prisms of the
 /// contact thickness (1 − f) h (f = 0.1, the barrier's share of the thickness, the
-/// compressible part of the fabric), overlap (`contact::intersection`, GJK on every pair).
+/// compressible part of the fabric), overlap (`contact::intersection`, GJK on every pair) —
+/// at rest and in every accepted state.
 #[test]
 fn three_ply_strip_bent_over_a_cylinder_keeps_its_plies_apart() {
     const R: f64 = 0.05;
@@ -264,10 +278,24 @@ fn three_ply_strip_bent_over_a_cylinder_keeps_its_plies_apart() {
     plyshell::contact::interply::attach(&mut solver, model, built.interply.as_ref().expect("interply")).expect("inter-ply contact attaches");
     let mut state = model.initial_state();
     let mut reports = Vec::new();
-    solver.run(&built.steps, &mut state, &mut |r, _, _| reports.push(r.clone()), &mut |_| {}).unwrap_or_else(|e| panic!("{e}"));
-    let seconds = t.elapsed().as_secs_f64();
-    let iterations: usize = reports.iter().map(|r| r.iterations).sum();
     let parts: Vec<usize> = ["strip/outer", "strip/carbon", "strip/liner"].iter().map(|n| model.parts.iter().position(|p| p.name == *n).expect("ply part")).collect();
+    // The independent check on every accepted state, timed apart from the solve.
+    let (mut overlaps_all, mut check_s) = (0usize, 0.0f64);
+    solver
+        .run(
+            &built.steps,
+            &mut state,
+            &mut |r, s, _| {
+                reports.push(r.clone());
+                let tc = std::time::Instant::now();
+                overlaps_all += plyshell::contact::intersection::intersecting_prisms(model, s, &parts, 1.0 - 0.1).len();
+                check_s += tc.elapsed().as_secs_f64();
+            },
+            &mut |_| {},
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
+    let seconds = t.elapsed().as_secs_f64() - check_s;
+    let iterations: usize = reports.iter().map(|r| r.iterations).sum();
     // Both directions: nodes of ply k+1 against ply k, and of ply k against ply k+1.
     let down = ply_penetration(model, &state, &parts);
     let reversed: Vec<usize> = parts.iter().rev().copied().collect();
@@ -304,7 +332,9 @@ fn three_ply_strip_bent_over_a_cylinder_keeps_its_plies_apart() {
         100.0 * body_pen,
         100.0 * (lift / weight - 1.0)
     );
+    println!("overlapping prisms over all {} accepted states: {overlaps_all} (check {check_s:.1} s)", reports.len());
     assert!(overlaps.is_empty(), "{} overlapping prisms, first {:?}", overlaps.len(), overlaps.first());
+    assert_eq!(overlaps_all, 0, "overlapping prisms in an accepted state");
     assert!(pen < 0.05 * h_min, "ply penetration {pen} m");
     assert!(body_pen < 0.05, "cylinder penetration {body_pen} of h");
     assert!((lift / weight - 1.0).abs() < 0.02, "reaction {lift} vs weight {weight}");

@@ -289,7 +289,7 @@ fn cloth_drapes_over_the_mannequin_shoulder_without_penetration() {
     assert_eq!(bodies.len(), 16);
     assert!(bodies.iter().any(|b| b.name == "body.upper_arm_l"));
     let t = std::time::Instant::now();
-    let (state, reports, penetration) = common::solve_on_bodies(&sc, &built);
+    let (state, reports, penetration, _) = common::solve_on_bodies(&sc, &built);
     let last = reports.last().expect("reports");
     let dynamics = last.dynamics.as_ref().expect("dynamic step");
     let lowest = (0..built.model.n_nodes()).map(|a| built.model.position(&state, a).z).fold(f64::MAX, f64::min);

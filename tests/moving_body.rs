@@ -26,7 +26,7 @@ fn solve(text: &str) -> (BuiltScene, State, Vec<IncrementReport>, f64) {
     let file = "moving_body.ron";
     let sc = scene::parse(file, text).unwrap_or_else(|e| panic!("{e}"));
     let built = scene::build(&sc, file, text).unwrap_or_else(|e| panic!("{e}"));
-    let (state, reports, penetration) = common::solve_on_bodies(&sc, &built);
+    let (state, reports, penetration, _) = common::solve_on_bodies(&sc, &built);
     (built, state, reports, penetration)
 }
 

@@ -162,11 +162,13 @@ fn sewing_closes_a_three_ply_sleeve() {
 /// front and back panels placed flat 24 cm apart on either side of a capsule torso; the two
 /// side and two shoulder seams start 24 cm apart and close by virtual sewing in a
 /// pseudo-transient Dynamic step with barrier contact and no hand-set inertia, damping or
-/// time step; the vest then drapes onto the shoulders.
+/// time step; the vest then drapes onto the shoulders. The panels also meet each other and
+/// themselves through the garment's default barrier surface contact.
 /// References: the seam ties are exact at full closure (every gap to round-off, bound 1e-6
 /// of the panel size); at rest the vertical resultant of the contact forces equals the
 /// weight ρ_A g A (A = 2 × 0.204 m², the outline's area) within 10⁻³; no shell face ever
-/// reaches a body (independent parry3d query on every accepted state).
+/// reaches a body (independent parry3d query on every accepted state), and no two triangles
+/// of the panels, thickened to prisms of the contact thickness, overlap in any of them.
 #[test]
 fn two_panel_vest_sewn_round_a_torso_with_defaults_drapes_to_rest() {
     let path = concat!(env!("CARGO_MANIFEST_DIR"), "/garments/examples/vest.ron");
@@ -177,7 +179,8 @@ fn two_panel_vest_sewn_round_a_torso_with_defaults_drapes_to_rest() {
     let gap0 = built.seams.iter().flat_map(|s| s.gaps(|n| model.x0[n])).fold(0.0, f64::max);
     assert!(gap0 > 0.2, "initial seam gap {gap0}");
     let t = std::time::Instant::now();
-    let (state, reports, penetration) = common::solve_on_bodies(&sc, &built);
+    let (state, reports, penetration, overlaps) = common::solve_on_bodies(&sc, &built);
+    assert!(built.interply.as_ref().is_some_and(|s| s.barrier.is_some()), "the vest has the default barrier surface contact");
     let last = reports.last().expect("reports");
     let dynamics = last.dynamics.as_ref().expect("dynamic step");
     let iterations: usize = reports.iter().map(|r| r.iterations).sum();
@@ -190,6 +193,8 @@ fn two_panel_vest_sewn_round_a_torso_with_defaults_drapes_to_rest() {
     );
     assert!(dynamics.at_rest, "not at rest");
     assert!(penetration <= 0.0, "a shell face reached a body: penetration {penetration:e}");
+    println!("overlapping prisms of the panels over all accepted states: {overlaps}");
+    assert_eq!(overlaps, 0, "overlapping prisms");
     let worst = built.seams.iter().flat_map(|s| s.gaps(|n| model.position(&state, n))).fold(0.0, f64::max);
     println!("seam gaps: initial {gap0:.3} m, final {worst:.2e} m");
     assert!(worst < 1e-6 * 0.55, "seam gap {worst}");

@@ -6,15 +6,19 @@ use plyshell::scene;
 use plyshell::solver::{IncrementReport, Solver};
 
 /// Solves `text`, attaching the garment's barrier contact; returns the model-owning scene,
-/// the final state and the increment reports.
-fn solve(text: &str) -> (scene::BuiltScene, State, Vec<IncrementReport>, f64) {
+/// the final state, the increment reports, the solve's seconds and the overlapping prisms
+/// of all parts at the contact thickness 0.8 h (`contact::intersection`, independent of the
+/// contact code) summed over every accepted state.
+fn solve(text: &str) -> (scene::BuiltScene, State, Vec<IncrementReport>, f64, usize) {
     let sc = scene::parse("surface.ron", text).unwrap_or_else(|e| panic!("{e}"));
     let built = scene::build(&sc, "surface.ron", text).unwrap_or_else(|e| panic!("{e}"));
     let t = std::time::Instant::now();
     let mut state = built.model.initial_state();
     let mut reports = Vec::new();
+    let (mut overlaps, mut check_s) = (0usize, 0.0f64);
     {
         let model = &built.model;
+        let parts: Vec<usize> = (0..model.parts.len()).collect();
         let mut solver = Solver::new(model, sc.solver.clone()).expect("solver");
         if let Some(c) = &built.contact {
             plyshell::contact::attach(&mut solver, model, c).expect("body contact attaches");
@@ -22,10 +26,22 @@ fn solve(text: &str) -> (scene::BuiltScene, State, Vec<IncrementReport>, f64) {
         let setup = built.interply.as_ref().expect("barrier surface contact");
         assert!(setup.barrier.is_some(), "the barrier formulation");
         plyshell::contact::interply::attach(&mut solver, model, setup).expect("surface contact attaches");
-        solver.run(&built.steps, &mut state, &mut |r, _, _| reports.push(r.clone()), &mut |_| {}).unwrap_or_else(|e| panic!("{e}"));
+        solver
+            .run(
+                &built.steps,
+                &mut state,
+                &mut |r, s, _| {
+                    reports.push(r.clone());
+                    let tc = std::time::Instant::now();
+                    overlaps += plyshell::contact::intersection::intersecting_prisms(model, s, &parts, 1.0 - 0.2).len();
+                    check_s += tc.elapsed().as_secs_f64();
+                },
+                &mut |_| {},
+            )
+            .unwrap_or_else(|e| panic!("{e}"));
     }
-    let seconds = t.elapsed().as_secs_f64();
-    (built, state, reports, seconds)
+    let seconds = t.elapsed().as_secs_f64() - check_s;
+    (built, state, reports, seconds, overlaps)
 }
 
 /// A 10 cm fabric patch (0.4 mm, 0.2 kg/m², E = 10 MPa) lying on a clamped fabric floor of the
@@ -72,9 +88,10 @@ fn patch_slide(built: &scene::BuiltScene, state: &State, reports: &[IncrementRep
 /// membrane stretch: asserted below 0.2 mm in 0.3 s (sliding freely it would move 88 mm).
 #[test]
 fn fabric_patch_sticks_on_a_slope_below_the_friction_angle() {
-    let (built, state, reports, seconds) = solve(&slope(0.2));
+    let (built, state, reports, seconds, overlaps) = solve(&slope(0.2));
     let (ux, t) = patch_slide(&built, &state, &reports);
-    println!("slope tan θ = 0.2: patch moved {ux:.3e} m in {t:.3} s ({} time steps, {seconds:.1} s)", reports.len());
+    println!("slope tan θ = 0.2: patch moved {ux:.3e} m in {t:.3} s ({} time steps, {seconds:.1} s); overlapping prisms over all states {overlaps}", reports.len());
+    assert_eq!(overlaps, 0, "overlapping prisms");
     assert!((t - 0.3).abs() < 1e-9, "ran to {t}");
     assert!(ux.abs() < 2e-4, "the patch crept {ux} m on a slope below the friction angle");
 }
@@ -85,7 +102,8 @@ fn fabric_patch_sticks_on_a_slope_below_the_friction_angle() {
 /// trails where tanh(|s|/δ) = tanh 2 = 0.964), and backward Euler adds O(Δt/t).
 #[test]
 fn fabric_patch_slides_on_a_slope_above_the_friction_angle() {
-    let (built, state, reports, seconds) = solve(&slope(0.5));
+    let (built, state, reports, seconds, overlaps) = solve(&slope(0.5));
+    assert_eq!(overlaps, 0, "overlapping prisms in an accepted state");
     let (ux, t) = patch_slide(&built, &state, &reports);
     let th = 0.5f64.atan();
     let exact = 0.5 * 9.81 * (th.sin() - 0.3 * th.cos()) * t * t;
@@ -119,7 +137,9 @@ fn nbc_sleeve(mu: f64, dynamic: bool) -> String {
 /// the compression tolerance (5 % of the thinner ply) of their thickness; a Dynamic step ends
 /// at rest.
 fn check_sleeve(mu: f64, dynamic: bool) {
-    let (built, state, reports, seconds) = solve(&nbc_sleeve(mu, dynamic));
+    let (built, state, reports, seconds, overlaps_all) = solve(&nbc_sleeve(mu, dynamic));
+    println!("NBC sleeve, μ = {mu}, dynamic {dynamic}: overlapping prisms over all {} accepted states {overlaps_all}", reports.len());
+    assert_eq!(overlaps_all, 0, "overlapping prisms in an accepted state");
     let model = &built.model;
     let parts: Vec<usize> = (0..model.parts.len()).collect();
     let overlaps = plyshell::contact::intersection::intersecting_prisms(model, &state, &parts, 1.0 - 0.2);
@@ -230,4 +250,102 @@ fn cloth_strip_folded_onto_itself_does_not_intersect() {
     println!("towel fold: {states} states, {iterations} Newton iterations, {:.1} s; {pairs} self-contact pairs at the end (min gap {:.3} d̂), top at {top:.4} m; overlapping prisms over all states {overlaps}", t.elapsed().as_secs_f64(), contact["min_gap_ratio"].as_f64().unwrap_or(0.0));
     assert!(pairs > 0, "the folded half does not touch the lower half");
     assert_eq!(overlaps, 0, "overlapping prisms");
+}
+
+/// The issue's self-contact drop: a 48 × 30 cm SVK sheet (the limp sheet of
+/// tests/barrier_contact.rs: E h = 500 N/m, h = 0.33 mm, ρ_A 0.15 kg/m²), 3 cm elements, with
+/// the garment's default contact (barrier self-contact, no `interply` key), is dropped from
+/// 1 cm above a thin horizontal rod (capsule, r = 5 mm, 15 cm above the ground) across its
+/// middle (21 cm on one side, 27 cm on the other) in a Dynamic step with all defaults. It
+/// folds over the rod, its two halves hang down side by side, and where they reach the ground
+/// they fold again and lie on it. Asserted: a stable rest; self-contact pairs active in some
+/// saved state; fold 1 (the sheet's line over the rod is the top, at the rod's top + h/2
+/// within 1 mm) and fold 2 (both free edges rest on the ground, z < 1 mm); the vertical
+/// reaction of rod and ground equals the weight ρ_A g A within 10⁻³ (static equilibrium); and,
+/// independently of the contact code, no two triangles' prisms at the contact thickness
+/// (1 − f) h overlap (`contact::intersection`) and no face is inside a body
+/// (`contact::max_penetration`) in any saved state.
+#[test]
+fn cloth_dropped_onto_a_rod_folds_twice_onto_the_ground_without_intersection() {
+    const LX: f64 = 0.48;
+    const LY: f64 = 0.30;
+    const RHO: f64 = 0.15;
+    let text = format!(
+        r#"Scene(
+    name: "double_fold",
+    materials: {{"cloth": StVenantKirchhoff(young: 1.5128e6, poisson: 0.3)}},
+    parts: [],
+    garment: Some((
+        element_size: 0.03,
+        plies: {{"cloth": (material: "cloth", thickness: 3.3045e-4, areal_density: {RHO})}},
+        panels: [(name: "sheet", outline: [(0.0, 0.0), ({LX}, 0.0), ({LX}, {LY}), (0.0, {LY})],
+                  edges: {{"left": (from: 3, to: 0), "right": (from: 1, to: 2)}},
+                  grain: (1.0, 0.0), plies: ["cloth"],
+                  placement: Rigid(translation: (-0.21, -0.15, 0.16)))],
+    )),
+    node_sets: {{"left": Edge(part: "sheet", edge: "left"), "right": Edge(part: "sheet", edge: "right")}},
+    loads: {{"weight": Gravity(part: "sheet", areal_density: {RHO}, g: (0.0, 0.0, -9.81))}},
+    steps: [(name: "fall", increments: 1, scale: {{"weight": 1.0}}, kind: Dynamic(()))],
+    contact: Some((formulation: Barrier(),
+        bodies: [
+            (name: "rod", shape: Capsule(radius: 0.005, height: 0.6), rotation: (90.0, 0.0, 0.0), translation: (0.0, 0.0, 0.15), friction: 0.4),
+            (name: "ground", shape: Plane, translation: (0.0, 0.0, 0.0), friction: 0.4),
+        ],
+    )),
+    output: (vtu: false),
+)"#
+    );
+    let sc = scene::parse("double_fold.ron", &text).unwrap_or_else(|e| panic!("{e}"));
+    let built = scene::build(&sc, "double_fold.ron", &text).unwrap_or_else(|e| panic!("{e}"));
+    let model = &built.model;
+    let setup = built.interply.as_ref().expect("a garment has surface contact by default");
+    assert!(setup.barrier.as_ref().is_some_and(|b| b.settings.self_contact), "the default is barrier self-contact");
+    let bodies = built.contact.as_ref().expect("rod and ground");
+    let t = std::time::Instant::now();
+    let mut solver = Solver::new(model, sc.solver.clone()).expect("solver");
+    plyshell::contact::attach(&mut solver, model, bodies).expect("body contact attaches");
+    plyshell::contact::interply::attach(&mut solver, model, setup).expect("self contact attaches");
+    let mut state = model.initial_state();
+    let mut reports: Vec<IncrementReport> = Vec::new();
+    let (mut states, mut overlaps, mut penetration, mut self_pairs) = (0usize, 0usize, f64::NEG_INFINITY, 0u64);
+    solver
+        .run(
+            &built.steps,
+            &mut state,
+            &mut |r, s, _| {
+                states += 1;
+                overlaps += plyshell::contact::intersection::intersecting_prisms(model, s, &[0], 1.0 - 0.2).len();
+                penetration = penetration.max(plyshell::contact::max_penetration(model, s, &bodies.bodies));
+                if let Some(c) = r.extra.iter().rev().find_map(|v| v.get("surface_contact")) {
+                    self_pairs = self_pairs.max(c["point_triangle"].as_u64().unwrap_or(0) + c["edge_edge"].as_u64().unwrap_or(0));
+                }
+                reports.push(r.clone());
+            },
+            &mut |_| {},
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
+    let seconds = t.elapsed().as_secs_f64();
+    let last = reports.last().and_then(|r| r.dynamics.as_ref()).expect("a dynamic report");
+    let iterations: usize = reports.iter().map(|r| r.iterations).sum();
+    let z = |a: usize| model.position(&state, a).z;
+    let top = (0..model.n_nodes()).map(z).fold(f64::NEG_INFINITY, f64::max);
+    let set = |name: &str| built.node_sets.get(name).cloned().unwrap_or_else(|| panic!("node set {name}"));
+    let edge_z = |name: &str| set(name).iter().map(|&a| z(a)).fold(f64::NEG_INFINITY, f64::max);
+    let (left, right) = (edge_z("left"), edge_z("right"));
+    let rz = reports.last().and_then(|r| r.extra.iter().rev().find_map(|v| v.get("contact"))).and_then(|c| c["resultant"][2].as_f64()).expect("body contact resultant");
+    let weight = RHO * LX * LY * 9.81;
+    println!(
+        "double fold: {} nodes, {} time steps, {iterations} Newton iterations, rest at t = {:.2} s, {seconds:.1} s; most self-contact pairs {self_pairs}; top {top:.4} m (rod top + h/2 {:.4}), free edges at z {left:.2e} / {right:.2e} m; reaction {rz:.6e} N vs weight {weight:.6e} N; overlapping prisms over {states} states {overlaps}; largest body penetration {penetration:.2e} m",
+        model.n_nodes(),
+        reports.len(),
+        last.time,
+        0.155 + 0.5 * 3.3045e-4,
+    );
+    assert!(last.at_rest, "not at rest");
+    assert!(self_pairs > 0, "the sheet never touched itself");
+    assert!((top - (0.155 + 0.5 * 3.3045e-4)).abs() < 1e-3, "fold 1: the top {top} m is not on the rod");
+    assert!(left < 1e-3 && right < 1e-3, "fold 2: free edges at {left} / {right} m, not on the ground");
+    assert!(((rz - weight) / weight).abs() < 1e-3, "vertical reaction {rz} vs weight {weight}");
+    assert_eq!(overlaps, 0, "overlapping prisms");
+    assert!(penetration <= 0.0, "a face went into a body by {penetration} m");
 }

@@ -157,8 +157,17 @@ fn yes() -> bool {
 }
 
 impl Default for InterplyFormulation {
+    /// The barrier with its default controls: d̂ from the plies' thicknesses and κ from the
+    /// nodes' weights or membrane stiffness (`contact::ipc::surface`).
     fn default() -> Self {
-        Self::Penalty
+        let s = crate::contact::ipc::SurfaceSettings::default();
+        Self::Barrier {
+            distance_factor: s.distance_factor,
+            stiffness_factor: s.stiffness_factor,
+            friction_slip: s.friction_slip,
+            self_contact: s.self_contact,
+            compression_tolerance: s.compression_tolerance,
+        }
     }
 }
 
@@ -166,14 +175,15 @@ impl Default for InterplyFormulation {
 #[derive(Clone, Debug, Serialize, serde::Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct InterplySpec {
-    /// Contact between the plies (default off). With the `Penalty` formulation (default) the
-    /// hanging NBC sleeve does not converge: a liner node inside the faceted carbon cylinder
+    /// Contact between the plies, the panels and each ply with itself (default on, with the
+    /// `Barrier` formulation). The `Penalty` formulation (an explicit opt-in) does not
+    /// converge on the hanging NBC sleeve: a liner node inside the faceted carbon cylinder
     /// projects into two neighbouring facets at nearly equal distance, its closest facet — and
     /// with it the force direction — switches by the 19° between their normals, and Newton
     /// 2-cycles. The `Barrier` formulation has no closest facet (a smooth sum over all
     /// point–triangle and edge–edge pairs) and solves it (`garments/nbc_sleeve.ron`).
     pub enabled: bool,
-    /// Penalty (default) or barrier formulation.
+    /// Barrier (default) or penalty formulation.
     pub formulation: InterplyFormulation,
     /// Penalty factor c in k_n = c·min(A_s, A_m)·a/ℓ² (default 1).
     pub penalty_factor: f64,
@@ -188,7 +198,7 @@ pub struct InterplySpec {
 impl Default for InterplySpec {
     fn default() -> Self {
         let s = InterplySettings::default();
-        Self { enabled: false, formulation: InterplyFormulation::default(), penalty_factor: s.penalty_factor, penalty: s.penalty, friction: s.friction, tangential_factor: s.tangential_factor }
+        Self { enabled: true, formulation: InterplyFormulation::default(), penalty_factor: s.penalty_factor, penalty: s.penalty, friction: s.friction, tangential_factor: s.tangential_factor }
     }
 }
 

@@ -638,6 +638,14 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
         Some((g, gm)) => crate::contact::interply::garment_setup(g, gm, garment_first_part, &loc)?,
         None => None,
     };
+    // A linear step is one update from the current state: the barrier's collision detection
+    // would shorten it (silently giving a fraction of the linear solution) and its
+    // potential has no stiffness there to act in a single solve.
+    if interply.as_ref().is_some_and(|s| s.barrier.is_some())
+        && let Some(s) = scene.steps.iter().find(|s| s.linear)
+    {
+        return Err(loc.at(Some(&s.name), Some("linear"), format!("steps[{}].linear", s.name), "a linear step cannot run with the garment's barrier surface contact (on by default): set garment.interply: (enabled: false) or make the step nonlinear"));
+    }
     crate::garment::apply_tapes(&seams, &x0, &mut elements, &mut sections);
     let dofs = DofMap::with_ties(&fixed, ties).map_err(|e| loc.at(None, Some("seams"), "seams", e))?;
     if dofs.n_free == 0 {
