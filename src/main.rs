@@ -1,7 +1,7 @@
 //! Command line: `plyshell solve`, `plyshell demo`, `plyshell check`, `plyshell import`, `plyshell export`,
 //! `plyshell bench`, `plyshell body`.
 
-use std::io::Write;
+use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -338,9 +338,23 @@ fn solve(scene: &Scene, built: &BuiltScene, out: &Path, quiet: bool) -> Result<(
             .progress_chars("=> "),
     );
     let names: Vec<String> = built.steps.iter().map(|s| s.name.clone()).collect();
+    // Without a terminal (a log file, CI) the bar is hidden: print a progress line at every
+    // new step and at most every PROGRESS_EVERY seconds instead.
+    const PROGRESS_EVERY: f64 = 10.0;
+    let lines = !quiet && !std::io::stderr().is_terminal();
+    let started = std::time::Instant::now();
+    let mut last_line: Option<(usize, f64)> = None;
     let mut progress = |p: &Progress| {
+        let msg = format!("step {} '{}' iter {} residual {:.2e}", p.step + 1, names.get(p.step).map(String::as_str).unwrap_or(""), p.iteration, p.residual);
+        if lines {
+            let now = started.elapsed().as_secs_f64();
+            if last_line.is_none_or(|(step, at)| step != p.step || now - at >= PROGRESS_EVERY) {
+                last_line = Some((p.step, now));
+                eprintln!("[{now:8.1} s] {:5.1} % {msg}", 100.0 * p.fraction);
+            }
+        }
         bar.set_position((p.fraction * 1000.0) as u64);
-        bar.set_message(format!("step {} '{}' iter {} residual {:.2e}", p.step + 1, names.get(p.step).map(String::as_str).unwrap_or(""), p.iteration, p.residual));
+        bar.set_message(msg);
     };
     let options = RunOptions { out_dir: Some(out.to_path_buf()) };
     let result = analysis::run(scene, built, &options, &mut progress);
@@ -362,7 +376,21 @@ fn solve(scene: &Scene, built: &BuiltScene, out: &Path, quiet: bool) -> Result<(
                     say!("  {} (node {}): {}", h.name, h.node, vals.join(", "));
                 }
             }
-            say!("results in {}: {}", out.display(), s.files.join(", "));
+            // A long series is summarised: its first and last files and the collections.
+            let files = if s.files.len() > 12 {
+                let series: Vec<&String> = s.files.iter().filter(|f| !f.ends_with(".vtu")).collect();
+                let vtu: Vec<&String> = s.files.iter().filter(|f| f.ends_with(".vtu")).collect();
+                format!(
+                    "{} VTU files ({} … {}), {}",
+                    vtu.len(),
+                    vtu.first().map_or("", |f| f.as_str()),
+                    vtu.last().map_or("", |f| f.as_str()),
+                    series.iter().map(|f| f.as_str()).collect::<Vec<_>>().join(", ")
+                )
+            } else {
+                s.files.join(", ")
+            };
+            say!("results in {}: {files}", out.display());
             Ok(())
         }
         Err(RunError::Solve { error, summary }) => {

@@ -140,3 +140,22 @@ fn pvd_times_of_a_dynamic_step_are_seconds() {
         assert!((t - e).abs() < 1e-9, "PVD times {times:?}, expected {expected:?}");
     }
 }
+
+/// Without a terminal (stderr captured, as in a log file or CI) `solve` prints progress
+/// lines — elapsed time, percentage, step, iteration, residual — at each new step, where
+/// the hidden progress bar would have shown them (issue 17, item 7).
+#[test]
+fn progress_lines_are_printed_when_stderr_is_not_a_terminal() {
+    let d = scratch("progress_lines");
+    let text = STRIP.replace(
+        r#"steps: [(name: "load", increments: 2, scale: {"pull": 1.0})],"#,
+        r#"steps: [(name: "load", increments: 2, scale: {"pull": 1.0}), (name: "more", increments: 2, scale: {"pull": 2.0})],"#,
+    );
+    assert!(text.contains("\"more\""), "the strip scene changed: update this test's replacement");
+    let scene = write(&d, "strip.ron", &text);
+    let out = d.join("out");
+    let (code, _, err) = run(&["solve", scene.to_str().expect("utf8"), "--out", out.to_str().expect("utf8")]);
+    assert_eq!(code, 0, "{err}");
+    let lines: Vec<&str> = err.lines().filter(|l| l.starts_with('[') && l.contains(" s] ") && l.contains("residual")).collect();
+    assert!(lines.iter().any(|l| l.contains("step 1 'load'")) && lines.iter().any(|l| l.contains("step 2 'more'")), "progress lines: {lines:?}\nstderr: {err}");
+}
