@@ -131,7 +131,7 @@ pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &m
                     let mut f_ext = vec![0.0; solved.internal_force().len()];
                     model.external_force(st, &report.scales, &mut f_ext);
                     let forces = Some((solved.internal_force(), f_ext.as_slice()));
-                    match crate::garment::export::write_garment_vtu(&dir.join(&gname), model, Some(st), built.garment.as_ref(), &built.seams, forces, export.binary) {
+                    match crate::garment::export::write_garment_vtu(&dir.join(&gname), model, Some(st), built.garment.as_ref(), &built.seams, forces, &export.extra_point_data, export.binary) {
                         Ok(()) => garment_entries.push((time, gname)),
                         Err(e) => io_error = io_error.take().or(Some(e.to_string())),
                     }
@@ -222,7 +222,7 @@ pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &m
         if garment_export {
             let flat = format!("{}_pattern.vtu", scene.name);
             summary.files.extend(garment_entries.iter().map(|e| e.1.clone()));
-            match crate::garment::export::write_garment_vtu(&dir.join(&flat), model, None, built.garment.as_ref(), &built.seams, None, export.binary) {
+            match crate::garment::export::write_garment_vtu(&dir.join(&flat), model, None, built.garment.as_ref(), &built.seams, None, &[], export.binary) {
                 Ok(()) => summary.files.push(flat),
                 Err(e) => problems.push(format!("{flat}: {e}")),
             }

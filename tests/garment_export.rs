@@ -242,3 +242,48 @@ fn nbc_sleeve_as_a_laminate_solves_and_names_its_plies() {
     let obj = std::fs::read_to_string(out.join("nbc_sleeve_garment.obj")).expect("garment OBJ");
     assert!(obj.contains("sleeve/outer+carbon+liner"), "OBJ groups: {:?}", obj.lines().filter(|l| l.starts_with('g') || l.starts_with('o')).collect::<Vec<_>>());
 }
+
+const CLEARANCE_SCRIPT: &str = r#"
+import json, sys
+import meshio
+res = {}
+for f in sys.argv[1:]:
+    m = meshio.read(f)
+    res[f] = {k: m.point_data[k].tolist() for k in ("body_clearance", "contact_pressure") if k in m.point_data}
+print(json.dumps(res))
+"#;
+
+/// Clearance to the body and contact pressure on the garment VTU (issue 17, item 7), as on
+/// the shell VTU: the two-panel seam strip (thickness 10 mm, in the plane z = 0, pulled in
+/// its plane) over a floor plane at z = −0.05 m has the clearance 0.05 − 0.005 = 0.045 m at
+/// every node (exact: plane distance minus the half thickness; the in-plane pull keeps z = 0
+/// to round-off) and no contact pressure, in both files, read by meshio.
+#[test]
+fn garment_vtu_carries_body_clearance_and_contact_pressure() {
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/garments/examples/two_panel_seam.ron");
+    let text = std::fs::read_to_string(path).expect("two_panel_seam.ron");
+    let text = text.replace("linear: true, ", "").replace(
+        "    monitors:",
+        "    contact: Some((bodies: [(name: \"floor\", shape: Plane, translation: (0.0, 0.0, -0.05))])),\n    monitors:",
+    );
+    assert!(text.contains("floor") && !text.contains("linear: true"), "the scene changed: update this test's replacements");
+    let out = Path::new(env!("CARGO_MANIFEST_DIR")).join("target/test-output/garment_export_clearance");
+    let summary = run(&text, &out);
+    let shell = summary.files.iter().rfind(|f| f.starts_with("two_panel_seam_0")).expect("a shell vtu").clone();
+    let garment = summary.files.iter().rfind(|f| f.starts_with("two_panel_seam_garment_0")).expect("a garment vtu").clone();
+    let (a, b) = (out.join(&shell), out.join(&garment));
+    let o = Command::new(python_with_meshio()).arg("-c").arg(CLEARANCE_SCRIPT).arg(&a).arg(&b).output().expect("python");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
+    for f in [&a, &b] {
+        let data = &v[f.to_str().expect("utf8")];
+        let clearance = data["body_clearance"].as_array().unwrap_or_else(|| panic!("{}: no body_clearance: {data}", f.display()));
+        assert_eq!(clearance.len(), 110, "{}", f.display());
+        for c in clearance {
+            let c = c.as_f64().expect("a number");
+            assert!((c - 0.045).abs() < 1e-9, "{}: clearance {c}, expected 0.045", f.display());
+        }
+        let pressure = data["contact_pressure"].as_array().expect("contact_pressure");
+        assert!(pressure.iter().all(|p| p.as_f64() == Some(0.0)), "{}", f.display());
+    }
+}

@@ -155,6 +155,21 @@ impl RigidBody {
     }
 }
 
+/// Clearance of each participating node's shell face to the nearest body: min over the
+/// bodies of the signed distance of the node minus its face offset h/2 (m; negative inside
+/// a body), written into `out[node]`; nodes not listed keep their value (NaN by the callers:
+/// not in contact). Bodies farther than `CLEARANCE_RANGE` are not searched (mesh BVH bound),
+/// so clearances beyond it read `CLEARANCE_RANGE`.
+pub fn clearances(bodies: &[RigidBody], nodes: &[usize], offset: &[f64], position: impl Fn(usize) -> Vector3<f64>, out: &mut [f64]) {
+    for (&a, &r) in nodes.iter().zip(offset) {
+        let x = position(a);
+        out[a] = bodies.iter().filter_map(|b| b.proximity(&x, CLEARANCE_RANGE + r)).map(|p| p.distance - r).fold(CLEARANCE_RANGE, f64::min);
+    }
+}
+
+/// Farthest clearance [`clearances`] resolves (m).
+pub const CLEARANCE_RANGE: f64 = 0.5;
+
 /// Projection of a local point on a parry shape's boundary: (signed distance, closest
 /// point, outward normal). The normal is (x − p)/|x − p| (flipped inside); a point on the
 /// surface itself gets the normal from a tiny probe along the shape's local gradient.

@@ -423,7 +423,7 @@ impl NodalForces for ContactSet {
     /// `contact_slip` (accumulated slip, m), `contact_status` (0 free, 1 stick, 2 slip) and
     /// `contact_gap` (smallest gap of the shell face to any body within reach, m; 0 when
     /// none is within the half-thickness).
-    fn point_data(&self, model: &Model, _state: &State) -> Vec<(String, usize, Vec<f64>)> {
+    fn point_data(&self, model: &Model, state: &State) -> Vec<(String, usize, Vec<f64>)> {
         let n = model.n_nodes();
         let nb = self.bodies.len();
         let (mut p, mut slip, mut status, mut gap) = (vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n]);
@@ -438,11 +438,14 @@ impl NodalForces for ContactSet {
                 }
             }
         }
+        let mut clearance = vec![f64::NAN; n];
+        super::body::clearances(&self.bodies, &self.nodes, &self.offset, |a| model.position(state, a), &mut clearance);
         vec![
             ("contact_pressure".into(), 1, p),
             ("contact_slip".into(), 1, slip),
             ("contact_status".into(), 1, status),
             ("contact_gap".into(), 1, gap),
+            ("body_clearance".into(), 1, clearance),
         ]
     }
 

@@ -86,7 +86,9 @@ pub fn garment_surface(model: &Model, layout: &GarmentLayout, position: impl Fn(
 /// for ply id i — one bit per ply, all its plies' bits on a laminate) and the force per unit
 /// length (quads: zero). Field data (with a layout): by ply
 /// id, `ply_names` (UTF-8, each name ended by a NUL byte) and `ply_thickness` (m); likewise
-/// `panel_names` and `material_names`.
+/// `panel_names` and `material_names`. `extra_point_data` (name, components, values per
+/// model node) is appended to the point data: the contact terms' `contact_pressure`,
+/// `body_clearance`, … of the shell VTU.
 pub fn write_garment_vtu(
     path: &Path,
     model: &Model,
@@ -94,6 +96,7 @@ pub fn write_garment_vtu(
     layout: Option<&GarmentLayout>,
     seams: &[SeamInfo],
     forces: Option<(&[f64], &[f64])>,
+    extra_point_data: &[(String, usize, Vec<f64>)],
     binary: bool,
 ) -> std::io::Result<()> {
     let points: Vec<[f64; 3]> = (0..model.n_nodes())
@@ -144,7 +147,9 @@ pub fn write_garment_vtu(
         points: &points,
         quads: &quads,
         lines: &lines,
-        point_data: vec![DataArray { name: "displacement", components: 3, values: &displacement }],
+        point_data: std::iter::once(DataArray { name: "displacement", components: 3, values: &displacement })
+            .chain(extra_point_data.iter().map(|(name, components, values)| DataArray { name, components: *components, values }))
+            .collect(),
         cell_data: vec![
             DataArray { name: "seam_force_per_length", components: 3, values: &force },
             DataArray { name: "seam_utilisation", components: 1, values: &utilisation },
