@@ -40,6 +40,10 @@ fn nbc_hood_is_sewn_and_rests_on_the_mannequin() {
     let mut state = model.initial_state();
     let mut solver = Solver::new(model, sc.solver.clone()).expect("solver");
     plyshell::contact::attach(&mut solver, model, built.contact.as_ref().expect("contact")).expect("contact attaches");
+    // The garment's surface contact (barrier inter-ply and self contact, the default), as
+    // `plyshell solve` attaches it.
+    let surface = built.interply.as_ref().expect("the garment default: inter-ply and self contact");
+    plyshell::contact::interply::attach(&mut solver, model, surface).expect("surface contact attaches");
     solver.run(&built.steps, &mut state, &mut |r, _, _| reports.push(r.clone()), &mut |_| {}).unwrap_or_else(|e| panic!("{e}"));
     let iterations: usize = reports.iter().map(|r| r.iterations).sum();
     println!(
@@ -106,6 +110,13 @@ fn nbc_hood_is_sewn_and_rests_on_the_mannequin() {
     }
     println!("largest penetration of a shell face {:.3} % of its ply's h ({worst_part}); {in_contact} nodes within 0.1 mm of the mannequin", 100.0 * worst_pen.max(0.0));
     assert!(in_contact > 0, "the hood does not touch the mannequin");
+    // Independent intersection check of the plies at rest (triangle prisms at the contact
+    // thickness, GJK; `contact::intersection`).
+    if let Some(b) = surface.barrier.as_ref() {
+        let overlaps = plyshell::contact::intersection::intersecting_prisms(model, &state, &b.parts, 1.0 - b.settings.distance_factor).len();
+        println!("overlapping ply prisms at rest: {overlaps}");
+        assert_eq!(overlaps, 0, "plies intersect at rest");
+    }
     assert!(worst_pen < 0.05, "penetration {worst_pen} h in {worst_part}");
 
     // At rest on the mannequin: contact reaction = weight.
