@@ -47,6 +47,9 @@ pub enum Level {
     Error,
     /// The solve runs, but the start is suspect.
     Warning,
+    /// Penalty contact with only the faces touching (the mid-surface outside): a support the
+    /// part is placed resting on.
+    Info,
 }
 
 /// A part with nodes starting on, inside or near one contact body.
@@ -56,6 +59,8 @@ pub struct PartNearBody {
     pub body: String,
     /// Part name (`panel` or `panel/ply`).
     pub part: String,
+    /// Where the part is defined in the scene: `garment.panels[panel]` or `parts[name]`.
+    pub field: String,
     /// Nodes whose shell face starts on or inside the body (g ≤ 0).
     pub inside: usize,
     /// Nodes within the barrier distance (0 < g < d̂); 0 for the penalty formulation.
@@ -64,7 +69,10 @@ pub struct PartNearBody {
     pub deepest_penetration: f64,
     /// Smallest gap g over the reported nodes (m; negative: inside).
     pub min_gap: f64,
-    /// Error when barrier contact would refuse the start, else warning.
+    /// Nodes whose mid-surface itself starts inside the body (g < −h/2).
+    pub midsurface_inside: usize,
+    /// Error when barrier contact would refuse the start; under penalty contact a warning
+    /// when a mid-surface node is inside, else info; within the barrier distance a warning.
     pub level: Level,
 }
 
@@ -105,6 +113,19 @@ fn row_length(x: &[nalgebra::Vector3<f64>], row: &[usize]) -> f64 {
     row.windows(2).map(|w| (x[w[1]] - x[w[0]]).norm()).sum()
 }
 
+/// The panel a part name (`panel` or `panel/ply`) belongs to.
+fn base(name: &str) -> &str {
+    name.split('/').next().unwrap_or(name)
+}
+
+/// The scene field defining part `name`: its garment panel, or the `parts` entry.
+fn scene_field(built: &BuiltScene, name: &str) -> String {
+    match &built.garment {
+        Some(g) if g.panels.iter().any(|p| p == base(name)) => format!("garment.panels[{}]", base(name)),
+        _ => format!("parts[{name}]"),
+    }
+}
+
 /// Seam gaps and part–body proximity of `built` at its reference configuration.
 pub fn report(scene_name: &str, built: &BuiltScene) -> CheckReport {
     let m = &built.model;
@@ -138,28 +159,38 @@ pub fn report(scene_name: &str, built: &BuiltScene) -> CheckReport {
         // The same participating nodes, offsets and d̂ as the solve's contact (`contact::attach`).
         let c = BarrierContact::new(m, setup.bodies.clone(), &setup.parts, &setup.barrier.clone().unwrap_or_else(BarrierSettings::default));
         let part_of = |node: usize| m.parts.iter().position(|p| (p.first_node..p.first_node + p.n_nodes).contains(&node));
-        // (body, part) → (inside, within, min gap)
-        let mut acc: std::collections::BTreeMap<(usize, usize), (usize, usize, f64)> = Default::default();
+        // (body, part) → (inside, within, min gap, mid-surface inside)
+        let mut acc: std::collections::BTreeMap<(usize, usize), (usize, usize, f64, usize)> = Default::default();
         for n in c.within(m, &m.initial_state(), barrier) {
             let Some(p) = part_of(n.node) else { continue };
-            let e = acc.entry((n.body, p)).or_insert((0, 0, f64::INFINITY));
+            let e = acc.entry((n.body, p)).or_insert((0, 0, f64::INFINITY, 0));
             if n.gap <= 0.0 {
                 e.0 += 1;
             } else {
                 e.1 += 1;
             }
+            if n.gap < -n.offset {
+                e.3 += 1;
+            }
             e.2 = e.2.min(n.gap);
         }
         near_bodies = acc
             .into_iter()
-            .map(|((b, p), (inside, within, min_gap))| PartNearBody {
+            .map(|((b, p), (inside, within, min_gap, mid))| PartNearBody {
                 body: c.bodies[b].name.clone(),
                 part: m.parts[p].name.clone(),
+                field: scene_field(built, &m.parts[p].name),
                 inside,
                 within_barrier: within,
                 deepest_penetration: if inside > 0 { -min_gap } else { 0.0 },
                 min_gap,
-                level: if inside > 0 && barrier { Level::Error } else { Level::Warning },
+                midsurface_inside: mid,
+                level: match (barrier, inside > 0) {
+                    (true, true) => Level::Error,
+                    (true, false) => Level::Warning,
+                    (false, _) if mid > 0 => Level::Warning,
+                    (false, _) => Level::Info,
+                },
             })
             .collect();
     }
@@ -178,8 +209,9 @@ pub fn report(scene_name: &str, built: &BuiltScene) -> CheckReport {
 }
 
 /// The report as table lines (stdout) and diagnostics (stderr, each starting `error:` or
-/// `warning:`).
-pub fn table(r: &CheckReport) -> (Vec<String>, Vec<String>) {
+/// `warning:`); `locate(anchor, field, message)` places a message in the scene file (the
+/// anchor is the quoted seam or panel/part name), e.g. with [`crate::scene::Locator::at_name`].
+pub fn table(r: &CheckReport, locate: &dyn Fn(&str, &str, &str) -> String) -> (Vec<String>, Vec<String>) {
     let (mut out, mut diag) = (Vec::new(), Vec::new());
     if !r.seams.is_empty() {
         let w = r.seams.iter().map(|s| s.name.chars().count()).max().unwrap_or(4).max(4);
@@ -197,14 +229,15 @@ pub fn table(r: &CheckReport) -> (Vec<String>, Vec<String>) {
                 s.mean_gap
             ));
             if s.mismatched {
-                diag.push(format!(
-                    "warning: seam '{}': its sides differ in length by {:.1} % ({:.4} m vs {:.4} m; more than {:.0} %): a mis-matched seam",
+                let message = format!(
+                    "seam '{}': its sides differ in length by {:.1} % ({:.4} m vs {:.4} m; more than {:.0} %): a mis-matched seam",
                     s.name,
                     100.0 * s.length_mismatch,
                     s.length_a,
                     s.length_b,
                     100.0 * r.seam_mismatch_tolerance
-                ));
+                );
+                diag.push(format!("warning: {}", locate(base(&s.name), &format!("garment.seams[{}]", base(&s.name)), &message)));
             }
         }
     }
@@ -221,17 +254,22 @@ pub fn table(r: &CheckReport) -> (Vec<String>, Vec<String>) {
                 let level = match p.level {
                     Level::Error => "error",
                     Level::Warning => "warning",
+                    Level::Info => "info",
                 };
                 out.push(format!("  {:<wb$} {:<wp$} {:>7} {:>8} {:>12.4e} {:>11.4e}  {level}", p.body, p.part, p.inside, p.within_barrier, p.deepest_penetration, p.min_gap));
-                diag.push(if p.inside > 0 {
-                    let why = if p.level == Level::Error { "barrier contact refuses this start" } else { "the penalty contact pushes them out in the first increment" };
+                if p.level == Level::Info {
+                    continue;
+                }
+                let message = if p.inside > 0 {
+                    let why = if p.level == Level::Error { "barrier contact refuses this start" } else { "their mid-surface is inside; the penalty contact pushes them out in the first increment" };
                     format!(
-                        "{level}: part '{}' starts inside body '{}': {} node(s) on or inside, deepest by {:.3e} m; {why}: move the part or the body",
+                        "part '{}' starts inside body '{}': {} node(s) on or inside, deepest by {:.3e} m; {why}: move the part or the body",
                         p.part, p.body, p.inside, p.deepest_penetration
                     )
                 } else {
-                    format!("{level}: part '{}' starts within the barrier distance of body '{}': {} node(s), smallest gap {:.3e} m", p.part, p.body, p.within_barrier, p.min_gap)
-                });
+                    format!("part '{}' starts within the barrier distance of body '{}': {} node(s), smallest gap {:.3e} m", p.part, p.body, p.within_barrier, p.min_gap)
+                };
+                diag.push(format!("{level}: {}", locate(base(&p.part), &p.field, &message)));
             }
         }
     }

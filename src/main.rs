@@ -168,7 +168,7 @@ fn main() -> ExitCode {
             .and_then(|s| scene::build(&s, DEMO_NAME, DEMO_SCENE).map(|b| (s, b)))
             .map_err(|e| e.to_string())
             .and_then(|(s, b)| solve(&s, &b, &out, false)),
-        Command::Check { scene, json } => scene::load(&scene).map_err(|e| e.to_string()).and_then(|(s, b)| check(&s, &b, json.as_deref())),
+        Command::Check { scene, json } => scene::load(&scene).map_err(|e| e.to_string()).and_then(|(s, b)| check(&scene, &s, &b, json.as_deref())),
         Command::Export { scene, inp } => scene::load(&scene).map_err(|e| e.to_string()).and_then(|(s, b)| export_inp(&s, &b, &inp)),
         Command::Import { pattern, out, size, units } => import(&pattern, &out, size.as_deref(), units),
         Command::Bench { json, quick, drive } => if drive { bench::drive::run_drive(&json, quick) } else { bench::run_all(&json, quick) }.map_err(|e| e.to_string()),
@@ -313,10 +313,15 @@ fn export_inp(scene: &Scene, built: &BuiltScene, path: &Path) -> Result<(), Stri
 /// `plyshell check`: the sizes and mesh quality ([`summary`]), then the seam gaps and the
 /// parts near contact bodies ([`plyshell::check`]) as a table and, with `json`, as JSON. A part
 /// starting inside a body under barrier contact is an error (the solve would refuse it).
-fn check(scene: &Scene, built: &BuiltScene, json: Option<&Path>) -> Result<(), String> {
+fn check(scene_path: &Path, scene: &Scene, built: &BuiltScene, json: Option<&Path>) -> Result<(), String> {
     summary(scene, built);
     let report = plyshell::check::report(&scene.name, built);
-    let (table, diagnostics) = plyshell::check::table(&report);
+    // Diagnostics point at the seam or panel in the file when its text can be read again.
+    let file = scene_path.display().to_string();
+    let text = std::fs::read(scene_path).ok().map(|b| String::from_utf8_lossy(&b).into_owned()).unwrap_or_default();
+    let loc = scene::Locator::new(&file, &text);
+    let locate = |anchor: &str, field: &str, message: &str| loc.at_name(anchor, field, message).to_string();
+    let (table, diagnostics) = plyshell::check::table(&report, &locate);
     for l in &table {
         say!("{l}");
     }

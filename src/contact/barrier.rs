@@ -179,6 +179,8 @@ pub struct NearNode {
     pub gap: f64,
     /// The node's barrier distance d̂ (m).
     pub dhat: f64,
+    /// The node's face offset h/2 (m): g < −h/2 puts the mid-surface itself inside.
+    pub offset: f64,
 }
 
 /// Barrier contact of a model's shell nodes with rigid bodies.
@@ -317,7 +319,7 @@ impl BarrierContact {
                 if let Some(p) = b.proximity(&x, f64::MAX) {
                     let gap = p.distance - self.offset[i];
                     if gap <= 0.0 || (barrier_zone && gap < self.dhat[i]) {
-                        out.push(NearNode { node: a, body: bi, gap, dhat: self.dhat[i] });
+                        out.push(NearNode { node: a, body: bi, gap, dhat: self.dhat[i], offset: self.offset[i] });
                     }
                 }
             }
