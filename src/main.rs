@@ -63,10 +63,14 @@ enum Command {
         #[arg(long, default_value = "out/demo")]
         out: PathBuf,
     },
-    /// Parse and build a scene without solving; print its sizes and mesh quality.
+    /// Parse and build a scene without solving; print its sizes, mesh quality, each seam's
+    /// initial gap and every part starting on, inside or near a contact body.
     Check {
         /// Scene file (RON).
         scene: PathBuf,
+        /// Also write the seam and body report as JSON here.
+        #[arg(long)]
+        json: Option<PathBuf>,
     },
     /// Mutational fuzzing of the scene files (developer tool): mutants of every .ron under
     /// CORPUS run through `check` (and a sample through `solve`) in capped subprocesses.
@@ -164,7 +168,7 @@ fn main() -> ExitCode {
             .and_then(|s| scene::build(&s, DEMO_NAME, DEMO_SCENE).map(|b| (s, b)))
             .map_err(|e| e.to_string())
             .and_then(|(s, b)| solve(&s, &b, &out, false)),
-        Command::Check { scene } => scene::load(&scene).map_err(|e| e.to_string()).map(|(s, b)| check(&s, &b)),
+        Command::Check { scene, json } => scene::load(&scene).map_err(|e| e.to_string()).and_then(|(s, b)| check(&scene, &s, &b, json.as_deref())),
         Command::Export { scene, inp } => scene::load(&scene).map_err(|e| e.to_string()).and_then(|(s, b)| export_inp(&s, &b, &inp)),
         Command::Import { pattern, out, size, units } => import(&pattern, &out, size.as_deref(), units),
         Command::Bench { json, quick, drive } => if drive { bench::drive::run_drive(&json, quick) } else { bench::run_all(&json, quick) }.map_err(|e| e.to_string()),
@@ -306,7 +310,37 @@ fn export_inp(scene: &Scene, built: &BuiltScene, path: &Path) -> Result<(), Stri
     Ok(())
 }
 
-fn check(scene: &Scene, built: &BuiltScene) {
+/// `plyshell check`: the sizes and mesh quality ([`summary`]), then the seam gaps and the
+/// parts near contact bodies ([`plyshell::check`]) as a table and, with `json`, as JSON. A part
+/// starting inside a body under barrier contact is an error (the solve would refuse it).
+fn check(scene_path: &Path, scene: &Scene, built: &BuiltScene, json: Option<&Path>) -> Result<(), String> {
+    summary(scene, built);
+    let report = plyshell::check::report(&scene.name, built);
+    // Diagnostics point at the seam or panel in the file when its text can be read again.
+    let file = scene_path.display().to_string();
+    let text = std::fs::read(scene_path).ok().map(|b| String::from_utf8_lossy(&b).into_owned()).unwrap_or_default();
+    let loc = scene::Locator::new(&file, &text);
+    let locate = |anchor: &str, field: &str, message: &str| loc.at_name(anchor, field, message).to_string();
+    let (table, diagnostics) = plyshell::check::table(&report, &locate);
+    for l in &table {
+        say!("{l}");
+    }
+    for l in &diagnostics {
+        warn!("{l}");
+    }
+    if let Some(path) = json {
+        let text = serde_json::to_string_pretty(&report).map_err(|e| e.to_string())?;
+        plyshell::io::atomic::write_atomic(path, text.as_bytes()).map_err(|e| format!("--json {}: {e}", path.display()))?;
+        say!("wrote {}", path.display());
+    }
+    match report.errors() {
+        0 => Ok(()),
+        n => Err(format!("{n} part(s) start on or inside a contact body (listed above); barrier contact needs a gap")),
+    }
+}
+
+/// Prints the scene's sizes, mesh quality per part and the build warnings.
+fn summary(scene: &Scene, built: &BuiltScene) {
     let m = &built.model;
     say!("scene '{}': {} parts, {} nodes, {} elements, {} free DOFs", scene.name, m.parts.len(), m.n_nodes(), m.elements.len(), m.dofs.n_free);
     for (name, q) in &built.quality {
@@ -330,7 +364,7 @@ fn solve(scene: &Scene, built: &BuiltScene, out: &Path, quiet: bool) -> Result<(
     if out.exists() && !out.is_dir() {
         return Err(format!("--out {}: exists and is not a directory; name a directory for the results", out.display()));
     }
-    check(scene, built);
+    summary(scene, built);
     let bar = if quiet { ProgressBar::hidden() } else { ProgressBar::new(1000) };
     bar.set_style(
         ProgressStyle::with_template("{elapsed_precise} [{bar:30}] {percent:>3}% {msg}")

@@ -167,6 +167,22 @@ pub struct BodyPlacement {
     pub rotation: [f64; 3],
 }
 
+/// A shell node whose face is on, inside or within the barrier distance of a body
+/// ([`BarrierContact::within`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NearNode {
+    /// Global node.
+    pub node: usize,
+    /// Index of the body in [`BarrierContact::bodies`].
+    pub body: usize,
+    /// Gap g = signed distance − h/2 (m); ≤ 0 on or inside the body.
+    pub gap: f64,
+    /// The node's barrier distance d̂ (m).
+    pub dhat: f64,
+    /// The node's face offset h/2 (m): g < −h/2 puts the mid-surface itself inside.
+    pub offset: f64,
+}
+
 /// Barrier contact of a model's shell nodes with rigid bodies.
 pub struct BarrierContact {
     /// The rigid bodies.
@@ -286,14 +302,25 @@ impl BarrierContact {
 
     /// Nodes that start inside or on a body: (global node, body name, gap).
     pub fn intersections(&self, model: &Model, state: &State) -> Vec<(usize, String, f64)> {
+        self.within(model, state, false).into_iter().filter(|n| n.gap <= 0.0).map(|n| (n.node, self.bodies[n.body].name.clone(), n.gap)).collect()
+    }
+
+    /// Nodes whose shell face is on or inside a body or, with `barrier_zone`, within the
+    /// barrier distance d̂ of it (0 < g < d̂, where the barrier b(g, d̂) is already active),
+    /// at `state`, however deep inside. The gap g is the body's signed distance at the node minus the face
+    /// offset h/2.
+    pub fn within(&self, model: &Model, state: &State, barrier_zone: bool) -> Vec<NearNode> {
         let mut out = Vec::new();
         for (i, &a) in self.nodes.iter().enumerate() {
             let x = model.x0[a] + state.u[a];
-            for b in &self.bodies {
-                if let Some(p) = b.proximity(&x, self.offset[i])
-                    && p.distance - self.offset[i] <= 0.0
-                {
-                    out.push((a, b.name.clone(), p.distance - self.offset[i]));
+            for (bi, b) in self.bodies.iter().enumerate() {
+                // Unbounded query: a bounded one finds no surface for a node deeper inside
+                // than the bound, and would miss it.
+                if let Some(p) = b.proximity(&x, f64::MAX) {
+                    let gap = p.distance - self.offset[i];
+                    if gap <= 0.0 || (barrier_zone && gap < self.dhat[i]) {
+                        out.push(NearNode { node: a, body: bi, gap, dhat: self.dhat[i], offset: self.offset[i] });
+                    }
                 }
             }
         }

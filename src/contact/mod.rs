@@ -19,7 +19,7 @@ use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 use parry3d_f64::math::Vector as PVec;
 use parry3d_f64::shape::{Ball, Capsule, Cuboid, Cylinder};
 
-pub use barrier::{BarrierContact, BarrierSettings};
+pub use barrier::{BarrierContact, BarrierSettings, NearNode};
 pub use body::{Proximity, RigidBody, Shape};
 pub use mechanics::{ContactIncrement, ContactSet, ContactSettings};
 pub use stabilize::Stabilization;
