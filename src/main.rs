@@ -168,6 +168,7 @@ fn main() -> ExitCode {
             .and_then(|s| scene::build(&s, DEMO_NAME, DEMO_SCENE).map(|b| (s, b)))
             .map_err(|e| e.to_string())
             .and_then(|(s, b)| solve(&s, &b, &out, false)),
+        Command::Check { scene, .. } if let Some(r) = plyshell::mannequin::check_file(&scene) => r.map(|d| say!("{}: {d}", scene.display())).map_err(|e| e.to_string()),
         Command::Check { scene, json } => scene::load(&scene).map_err(|e| e.to_string()).and_then(|(s, b)| check(&scene, &s, &b, json.as_deref())),
         Command::Export { scene, inp } => scene::load(&scene).map_err(|e| e.to_string()).and_then(|(s, b)| export_inp(&s, &b, &inp)),
         Command::Import { pattern, out, size, units } => import(&pattern, &out, size.as_deref(), units),

@@ -177,3 +177,25 @@ fn a_part_resting_on_a_support_under_penalty_contact_is_info() {
     assert!(!near.is_empty() && near.iter().all(|p| p["level"] == "info" && p["midsurface_inside"] == 0), "{near:?}");
     assert!(!stderr.contains("part 'specimen'"), "{stderr}");
 }
+
+/// `plyshell check` validates the mannequin's own files too (measurements, pose, motion),
+/// told apart by their top-level RON struct: every shipped one passes, and a pose naming an
+/// unknown joint is refused with its file, line and column.
+#[test]
+fn check_validates_mannequin_files() {
+    let run = |p: &Path| Command::new(env!("CARGO_BIN_EXE_plyshell")).arg("check").arg(p).output().expect("run plyshell");
+    let body = Path::new(env!("CARGO_MANIFEST_DIR")).join("garments/body");
+    let mut files: Vec<PathBuf> = std::fs::read_dir(&body).expect("garments/body").chain(std::fs::read_dir(body.join("poses")).expect("poses")).filter_map(|e| e.ok().map(|e| e.path())).filter(|p| p.extension().is_some_and(|x| x == "ron")).collect();
+    files.sort();
+    assert!(files.len() >= 10, "{files:?}");
+    for f in &files {
+        let o = run(f);
+        assert!(o.status.success(), "{}: {}", f.display(), String::from_utf8_lossy(&o.stderr));
+    }
+    let d = scratch("bad_pose");
+    let bad = d.join("bad.ron");
+    std::fs::write(&bad, "// a pose\nPose(\n    elbow_x: (flexion: 10),\n)\n").expect("write");
+    let o = run(&bad);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("bad.ron:3:"), "{err}");
+}

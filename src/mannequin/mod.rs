@@ -122,6 +122,37 @@ impl Mannequin {
     }
 }
 
+/// Checks a mannequin file — measurements, pose or motion, told apart by the name of its
+/// top-level RON struct — and describes it in one line; None when `path` is none of these
+/// (e.g. a scene). Errors are located as by the loaders.
+pub fn check_file(path: &std::path::Path) -> Option<Result<String, SceneError>> {
+    let text = pose::read_text(path).ok()?;
+    let kind = ron_struct_name(crate::scene::strip_bom(&text))?;
+    Some(match kind {
+        "Measurements" => load_measurements(path).map(|m| format!("measurements: stature {} m, chest {} m, waist {} m, hip {} m", m.stature, m.chest_girth, m.waist_girth, m.hip_girth)),
+        "Pose" => load_pose(path).map(|_| "pose: joint angles valid".to_string()),
+        "Motion" => load_motion(path).map(|m| format!("motion: {} poses from t = {} to {} s", m.frames.len(), m.frames.first().map_or(0.0, |f| f.0), m.frames.last().map_or(0.0, |f| f.0))),
+        _ => return None,
+    })
+}
+
+/// The identifier that opens a RON text after whitespace and `//` or `/* */` comments.
+fn ron_struct_name(text: &str) -> Option<&str> {
+    let mut rest = text;
+    loop {
+        rest = rest.trim_start();
+        if let Some(r) = rest.strip_prefix("//") {
+            rest = r.split_once('\n').map_or("", |x| x.1);
+        } else if let Some(r) = rest.strip_prefix("/*") {
+            rest = r.split_once("*/").map_or("", |x| x.1);
+        } else {
+            break;
+        }
+    }
+    let end = rest.find(|c: char| !(c.is_alphanumeric() || c == '_')).unwrap_or(rest.len());
+    (end > 0).then(|| &rest[..end])
+}
+
 /// Reads a measurements file.
 pub fn load_measurements(path: &std::path::Path) -> Result<Resolved, SceneError> {
     parse_measurements(&path.display().to_string(), &pose::read_text(path)?)
