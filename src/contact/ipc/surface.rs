@@ -38,7 +38,7 @@
 //! in its plain form; `contact::ccd`).
 //!
 //! Cost: the pairs' energies are summed per closest feature before the distance is
-//! differentiated (`potential.rs`: stacked plies give dozens of pairs per stacked vertex pair,
+//! differentiated in closed form (`distance.rs`) (`potential.rs`: stacked plies give dozens of pairs per stacked vertex pair,
 //! nearly all measuring one vertex–vertex or vertex–edge distance); each candidate's reference
 //! constants are computed once and kept; and the converged state's pairs, already evaluated
 //! by the last Newton iteration, are reused on commit.
@@ -50,7 +50,6 @@ use std::time::Instant;
 use nalgebra::{Matrix3, Vector3};
 use rayon::prelude::*;
 
-use crate::autodiff::Hd;
 use super::broad_phase::{candidates, Pads, Sweep};
 use super::friction::{Friction, FrictionTerm};
 use super::potential::{derivative, group, mollified_derivative, Blocks, Derivative, FeatureKey, FxMap, Scalar};
@@ -110,7 +109,7 @@ struct Term {
     scalar: Scalar,
     /// Gradient and Hessian in all four nodes of a pair with the edge–edge mollifier (it
     /// depends on more than the distance), when derivatives were asked for.
-    mollified: Option<Box<Hd<12>>>,
+    mollified: Option<Box<Derivative>>,
     gap: f64,
     dhat: f64,
     /// Thickness of the thinner ply of the pair.
@@ -480,7 +479,7 @@ impl SurfaceContact {
         let n_mollified = terms.iter().filter(|t| t.mollified.is_some()).count();
         let mut out: Vec<Derivative> = Vec::with_capacity(grouped.len() + n_mollified);
         out.par_extend(grouped.par_iter().map(|(k, s)| derivative(k, s, x)));
-        out.extend(terms.iter().filter_map(|t| t.mollified.as_ref().map(|e| Derivative::Four(t.nodes, **e))));
+        out.extend(terms.iter().filter_map(|t| t.mollified.as_ref().map(|e| (**e).clone())));
         out
     }
 
