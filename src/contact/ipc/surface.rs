@@ -553,9 +553,9 @@ impl NodalForces for SurfaceContact {
         true
     }
 
-    /// Additive CCD in its plain form: along the straight move from `from` to `to`, a pair's
-    /// distance falls at most by the sum of its two primitives' largest nodal moves per unit
-    /// of the step, so from a gap g it may advance by (g − g_min)/ℓ, g_min = (1 − CCD_CLOSE) g₀,
+    /// Additive CCD: along the straight move from `from` to `to`, a pair's distance falls at
+    /// most by the sum of its two primitives' largest nodal moves relative to the pair's mean
+    /// move per unit of the step, so from a gap g it may advance by (g − g_min)/ℓ, g_min = (1 − CCD_CLOSE) g₀,
     /// repeatedly; the smallest fraction over all candidate pairs of the sweep is the bound.
     fn max_step(&self, model: &Model, from: &State, to: &State) -> f64 {
         let t = Instant::now();
@@ -568,9 +568,14 @@ impl NodalForces for SurfaceContact {
             .map(|&(kind, _, nodes, c)| {
                 let a = nodes.map(x0);
                 let d: [Vector3<f64>; 4] = std::array::from_fn(|k| x1(nodes[k]) - a[k]);
+                // The distance does not change when all four nodes move alike: bound the rate
+                // by the moves relative to their mean (additive CCD, Li, Kaufman & Jiang 2021,
+                // §4), so that plies moving together advance in one step.
+                let mean = (d[0] + d[1] + d[2] + d[3]) * 0.25;
+                let r: [f64; 4] = std::array::from_fn(|k| (d[k] - mean).norm());
                 let (m1, m2) = match kind {
-                    Kind::PointTriangle => (d[0].norm(), d[1].norm().max(d[2].norm()).max(d[3].norm())),
-                    Kind::EdgeEdge => (d[0].norm().max(d[1].norm()), d[2].norm().max(d[3].norm())),
+                    Kind::PointTriangle => (r[0], r[1].max(r[2]).max(r[3])),
+                    Kind::EdgeEdge => (r[0].max(r[1]), r[2].max(r[3])),
                 };
                 if m1 + m2 == 0.0 {
                     return 1.0;
@@ -590,6 +595,10 @@ impl NodalForces for SurfaceContact {
         }
         if let Ok(mut tm) = self.timings.lock() {
             tm.ccd += t.elapsed().as_secs_f64();
+            tm.ccd_calls += 1;
+            if s < 1.0 {
+                tm.ccd_limited += 1;
+            }
         }
         s
     }
