@@ -38,7 +38,7 @@
 //! in its plain form; `contact::ccd`).
 //!
 //! Cost: the pairs' energies are summed per closest feature before the distance is
-//! differentiated in closed form (`distance.rs`) (`potential.rs`: stacked plies give dozens of pairs per stacked vertex pair,
+//! differentiated, in closed form (`distance.rs`; `potential.rs`: stacked plies give dozens of pairs per stacked vertex pair,
 //! nearly all measuring one vertex–vertex or vertex–edge distance); each candidate's reference
 //! constants are computed once and kept; and the converged state's pairs, already evaluated
 //! by the last Newton iteration, are reused on commit.
