@@ -106,8 +106,31 @@ pub trait NodalForces: Send {
     }
 }
 
+/// The equations of node `n`'s three translations when all three are free (neither fixed
+/// nor tied), else None.
+fn free_translations(model: &Model, n: usize) -> Option<[usize; 3]> {
+    let e: [usize; 3] = std::array::from_fn(|k| model.dofs.eq[NODE_DOFS * n + k]);
+    e.iter().all(|&g| g != crate::model::FIXED).then_some(e)
+}
+
 /// Adds −½(J + Jᵀ) of node `n`'s translations to the upper-triangular CSC tangent `values`.
 pub(super) fn add_node_block(model: &Model, col_ptr: &[usize], row_idx: &[usize], values: &mut [f64], n: usize, j: &Matrix3<f64>) {
+    if let Some(e) = free_translations(model, n) {
+        // A free node: its own three equations, no transformation (and no allocation).
+        for b in 0..3 {
+            for a in 0..3 {
+                let (r, c) = (e[a], e[b]);
+                if r > c {
+                    continue;
+                }
+                let rows = &row_idx[col_ptr[c]..col_ptr[c + 1]];
+                if let Ok(p) = rows.binary_search(&r) {
+                    values[col_ptr[c] + p] -= 0.5 * (j[(a, b)] + j[(b, a)]);
+                }
+            }
+        }
+        return;
+    }
     // Through the tie transformation (Tᵀ J T) when the node is a tied slave.
     let expanded: [Vec<(usize, f64)>; 3] = std::array::from_fn(|a| model.dofs.expand(NODE_DOFS * n + a));
     for b in 0..3 {
@@ -133,6 +156,22 @@ pub(super) fn add_node_block(model: &Model, col_ptr: &[usize], row_idx: &[usize]
 /// full matrix only entries with row ≤ column are stored). Returns false when an entry falls
 /// outside the pattern (nothing is added for it).
 pub(super) fn add_node_pair_block(model: &Model, col_ptr: &[usize], row_idx: &[usize], values: &mut [f64], a: usize, b: usize, j: &Matrix3<f64>) -> bool {
+    if let (Some(ea), Some(eb)) = (free_translations(model, a), free_translations(model, b)) {
+        // Two free nodes (no transformation, no allocation): entry (p, q) of J lands at
+        // (a_p, b_q) or, transposed, at (b_q, a_p) — whichever lies in the upper triangle.
+        let mut inside = true;
+        for q in 0..3 {
+            for p in 0..3 {
+                let (r, c) = if ea[p] <= eb[q] { (ea[p], eb[q]) } else { (eb[q], ea[p]) };
+                let rows = &row_idx[col_ptr[c]..col_ptr[c + 1]];
+                match rows.binary_search(&r) {
+                    Ok(s) => values[col_ptr[c] + s] += -0.5 * j[(p, q)],
+                    Err(_) => inside = false,
+                }
+            }
+        }
+        return inside;
+    }
     let ea: [Vec<(usize, f64)>; 3] = std::array::from_fn(|k| model.dofs.expand(NODE_DOFS * a + k));
     let eb: [Vec<(usize, f64)>; 3] = std::array::from_fn(|k| model.dofs.expand(NODE_DOFS * b + k));
     let mut inside = true;

@@ -1,7 +1,8 @@
-//! Incremental-potential contact between shell surfaces: primitive distances (derived with
-//! `crate::autodiff`), broad phase and the barrier/friction term.
+//! Incremental-potential contact between shell surfaces: primitive distances and their
+//! closed-form derivatives, broad phase and the barrier/friction term.
 
 pub mod broad_phase;
+pub mod distance;
 mod friction;
 mod potential;
 pub mod primitives;

@@ -8,10 +8,13 @@
 //! b₁) for two edges. Its squared distance is one of four expressions of the slots its
 //! closest features involve — point–point |p−q|², point–edge |(a−p)×(b−p)|²/|b−a|²,
 //! point–plane ((p−a)·n)²/|n|² and line–line ((b₀−a₀)·n)²/|n|² — each smooth where it is the
-//! distance, evaluated in [`Hd`] for exact gradients and Hessians.
+//! distance; its gradient and Hessian in closed form are in `distance.rs` (the forms here in
+//! `crate::autodiff`'s `Hd`, with exact derivatives, are the tests' reference).
 
 use nalgebra::Vector3;
 
+use super::distance;
+#[cfg(test)]
 use crate::autodiff::{cross, dot, point, sub, Hd, Hv};
 
 /// The closest features of a pair: which slots enter the distance.
@@ -135,6 +138,7 @@ fn point_segment_feature(p: &Vector3<f64>, a: &Vector3<f64>, b: &Vector3<f64>) -
     }
 }
 
+#[cfg(test)]
 /// Squared distance of the features `f` of the four points `x`, with its gradient and
 /// Hessian with respect to the 12 coordinates (slot k: variables 3k..3k+3).
 pub fn squared_distance(f: Feature, x: &[Vector3<f64>; 4]) -> Hd<12> {
@@ -150,6 +154,7 @@ pub fn squared_distance(f: Feature, x: &[Vector3<f64>; 4]) -> Hd<12> {
     }
 }
 
+#[cfg(test)]
 /// [`squared_distance_of`] with variables only for `slots` (N = 3 × their number), its
 /// gradient and Hessian expanded to the 12 coordinates of the four slots.
 fn expanded<const N: usize>(f: Feature, x: &[Vector3<f64>; 4], slots: &[usize]) -> Hd<12> {
@@ -166,6 +171,7 @@ fn expanded<const N: usize>(f: Feature, x: &[Vector3<f64>; 4], slots: &[usize]) 
     out
 }
 
+#[cfg(test)]
 /// Squared distance of the features `f` of the four points `x`, differentiated only in the
 /// coordinates of `slots` (N = 3 × their number; slot `slots[c]` takes variables 3c..3c+3),
 /// the other points held fixed: the derivatives of a feature in its own nodes only.
@@ -177,12 +183,14 @@ pub fn squared_distance_in<const N: usize>(f: Feature, x: &[Vector3<f64>; 4], sl
     squared_distance_of(f, &p)
 }
 
-/// Squared distance of the features `f` (value only).
+/// Squared distance of the features `f` (value only; [`distance::value`]).
 pub fn squared_distance_value(f: Feature, x: &[Vector3<f64>; 4]) -> f64 {
-    let p: [Hv<0>; 4] = std::array::from_fn(|k| [Hd::c(x[k].x), Hd::c(x[k].y), Hd::c(x[k].z)]);
-    squared_distance_of(f, &p).v
+    distance::value(f, x)
 }
 
+/// The ratio forms in [`Hd`]: exact gradients and Hessians by automatic differentiation, the
+/// reference of the closed forms of [`distance`] in the tests.
+#[cfg(test)]
 fn squared_distance_of<const N: usize>(f: Feature, p: &[Hv<N>; 4]) -> Hd<N> {
     match f {
         Feature::PointPoint(i, j) => {
@@ -205,6 +213,7 @@ fn squared_distance_of<const N: usize>(f: Feature, p: &[Hv<N>; 4]) -> Hd<N> {
     }
 }
 
+#[cfg(test)]
 /// |e_a × e_b|² of edges x[0]–x[1] and x[2]–x[3] (the argument of the edge–edge mollifier),
 /// with gradient and Hessian.
 pub fn cross_squared(x: &[Vector3<f64>; 4]) -> Hd<12> {

@@ -47,4 +47,8 @@ pub struct SurfaceTimings {
     pub evaluations_on_sweep: usize,
     /// Evaluations that ran their own broad phase.
     pub evaluations_searched: usize,
+    /// Collision-detection calls (one per Newton step).
+    pub ccd_calls: usize,
+    /// Of them, those that shortened the step (a fraction below 1).
+    pub ccd_limited: usize,
 }

@@ -38,7 +38,7 @@
 //! in its plain form; `contact::ccd`).
 //!
 //! Cost: the pairs' energies are summed per closest feature before the distance is
-//! differentiated (`potential.rs`: stacked plies give dozens of pairs per stacked vertex pair,
+//! differentiated, in closed form (`distance.rs`; `potential.rs`: stacked plies give dozens of pairs per stacked vertex pair,
 //! nearly all measuring one vertex–vertex or vertex–edge distance); each candidate's reference
 //! constants are computed once and kept; and the converged state's pairs, already evaluated
 //! by the last Newton iteration, are reused on commit.
@@ -50,7 +50,6 @@ use std::time::Instant;
 use nalgebra::{Matrix3, Vector3};
 use rayon::prelude::*;
 
-use crate::autodiff::Hd;
 use super::broad_phase::{candidates, Pads, Sweep};
 use super::friction::{Friction, FrictionTerm};
 use super::potential::{derivative, group, mollified_derivative, Blocks, Derivative, FeatureKey, FxMap, Scalar};
@@ -110,7 +109,7 @@ struct Term {
     scalar: Scalar,
     /// Gradient and Hessian in all four nodes of a pair with the edge–edge mollifier (it
     /// depends on more than the distance), when derivatives were asked for.
-    mollified: Option<Box<Hd<12>>>,
+    mollified: Option<Box<Derivative>>,
     gap: f64,
     dhat: f64,
     /// Thickness of the thinner ply of the pair.
@@ -480,7 +479,7 @@ impl SurfaceContact {
         let n_mollified = terms.iter().filter(|t| t.mollified.is_some()).count();
         let mut out: Vec<Derivative> = Vec::with_capacity(grouped.len() + n_mollified);
         out.par_extend(grouped.par_iter().map(|(k, s)| derivative(k, s, x)));
-        out.extend(terms.iter().filter_map(|t| t.mollified.as_ref().map(|e| Derivative::Four(t.nodes, **e))));
+        out.extend(terms.iter().filter_map(|t| t.mollified.as_ref().map(|e| (**e).clone())));
         out
     }
 
@@ -554,9 +553,9 @@ impl NodalForces for SurfaceContact {
         true
     }
 
-    /// Additive CCD in its plain form: along the straight move from `from` to `to`, a pair's
-    /// distance falls at most by the sum of its two primitives' largest nodal moves per unit
-    /// of the step, so from a gap g it may advance by (g − g_min)/ℓ, g_min = (1 − CCD_CLOSE) g₀,
+    /// Additive CCD: along the straight move from `from` to `to`, a pair's distance falls at
+    /// most by the sum of its two primitives' largest nodal moves relative to the pair's mean
+    /// move per unit of the step, so from a gap g it may advance by (g − g_min)/ℓ, g_min = (1 − CCD_CLOSE) g₀,
     /// repeatedly; the smallest fraction over all candidate pairs of the sweep is the bound.
     fn max_step(&self, model: &Model, from: &State, to: &State) -> f64 {
         let t = Instant::now();
@@ -569,9 +568,14 @@ impl NodalForces for SurfaceContact {
             .map(|&(kind, _, nodes, c)| {
                 let a = nodes.map(x0);
                 let d: [Vector3<f64>; 4] = std::array::from_fn(|k| x1(nodes[k]) - a[k]);
+                // The distance does not change when all four nodes move alike: bound the rate
+                // by the moves relative to their mean (additive CCD, Li, Kaufman & Jiang 2021,
+                // §4), so that plies moving together advance in one step.
+                let mean = (d[0] + d[1] + d[2] + d[3]) * 0.25;
+                let r: [f64; 4] = std::array::from_fn(|k| (d[k] - mean).norm());
                 let (m1, m2) = match kind {
-                    Kind::PointTriangle => (d[0].norm(), d[1].norm().max(d[2].norm()).max(d[3].norm())),
-                    Kind::EdgeEdge => (d[0].norm().max(d[1].norm()), d[2].norm().max(d[3].norm())),
+                    Kind::PointTriangle => (r[0], r[1].max(r[2]).max(r[3])),
+                    Kind::EdgeEdge => (r[0].max(r[1]), r[2].max(r[3])),
                 };
                 if m1 + m2 == 0.0 {
                     return 1.0;
@@ -591,6 +595,10 @@ impl NodalForces for SurfaceContact {
         }
         if let Ok(mut tm) = self.timings.lock() {
             tm.ccd += t.elapsed().as_secs_f64();
+            tm.ccd_calls += 1;
+            if s < 1.0 {
+                tm.ccd_limited += 1;
+            }
         }
         s
     }
