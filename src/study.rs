@@ -340,17 +340,64 @@ pub fn run_study(path: &Path, options: &StudyOptions, log: &mut dyn FnMut(&str))
         }
     }
     plan.push((format!("discrete h×{finest} (reference)"), format!("h×{finest}"), Some(finest), None, PlyModel::Discrete));
+    // A variant that cannot be built (e.g. a stitch line passing no node of a coarse mesh)
+    // is a failed row; the reference must build.
+    let n_plan = plan.len();
     let mut runs = Vec::new();
-    for (label, mesh, m, tol, ply) in plan {
+    let mut failed: Vec<(usize, StudyRow)> = Vec::new();
+    for (i, (label, mesh, m, tol, ply)) in plan.into_iter().enumerate() {
         let sc = variant(&base, m, tol, ply)?;
         let dir = options.vtu.then(|| options.out.join(label.replace([' ', '×', '(', ')'], "_").replace("__", "_").trim_matches('_').to_string()));
-        runs.push(solve(&file, &text, &sc, &label, mesh, ply, dir, log)?);
+        match solve(&file, &text, &sc, &label, mesh.clone(), ply, dir, log) {
+            Ok(r) => runs.push((i, r)),
+            Err(e) if i + 1 < n_plan => {
+                log(&e);
+                failed.push((i, failed_row(label, mesh, ply, e)));
+            }
+            Err(e) => return Err(e),
+        }
     }
-    let reference = runs.len() - 1;
-    compare(&mut runs, reference);
-    let rows: Vec<StudyRow> = runs.into_iter().map(|r| r.row).collect();
+    let mut solved: Vec<Run> = Vec::with_capacity(runs.len());
+    let mut order: Vec<usize> = Vec::with_capacity(n_plan);
+    for (i, r) in runs {
+        order.push(i);
+        solved.push(r);
+    }
+    let reference = solved.len() - 1;
+    compare(&mut solved, reference);
+    let mut rows: Vec<(usize, StudyRow)> = order.into_iter().zip(solved.into_iter().map(|r| r.row)).collect();
+    rows.extend(failed);
+    rows.sort_by_key(|r| r.0);
+    let rows: Vec<StudyRow> = rows.into_iter().map(|r| r.1).collect();
     write_reports(&options.out, &file, &rows)?;
     Ok(rows)
+}
+
+/// The row of a variant that could not be built: its error, no sizes, NaN errors.
+fn failed_row(label: String, mesh: String, ply: PlyModel, error: String) -> StudyRow {
+    StudyRow {
+        label,
+        ply_model: ply_name(ply).into(),
+        mesh,
+        element_size: [f64::NAN; 2],
+        nodes: 0,
+        elements: 0,
+        dofs: 0,
+        newton_iterations: 0,
+        build_s: 0.0,
+        wall_s: 0.0,
+        cpu_s: 0.0,
+        status: format!("failed: {error}"),
+        shape_rms: f64::NAN,
+        shape_max: f64::NAN,
+        seam_force_error: None,
+        seam_forces: Vec::new(),
+        clearance_min: None,
+        clearance_mean: None,
+        clearance_error: None,
+        drape_coefficient: None,
+        drape_error: None,
+    }
 }
 
 /// Percent with 2 decimals, or "–".
