@@ -254,6 +254,7 @@ pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &m
         export_s += t.elapsed().as_secs_f64();
     }
     summary.export_s = export_s;
+    summary.final_positions = (0..model.n_nodes()).map(|n| model.position(&state, n).into()).collect();
     summary.wall_s = t0.elapsed().as_secs_f64();
     summary.peak_memory_mib = peak_memory_mib();
     if !problems.is_empty() {

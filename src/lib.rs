@@ -30,6 +30,7 @@ pub mod check;
 pub mod io;
 pub mod results;
 pub mod bench;
+pub mod study;
 pub mod contact;
 pub mod garment;
 pub mod pattern;

@@ -1,5 +1,5 @@
 //! Command line: `plyshell solve`, `plyshell demo`, `plyshell check`, `plyshell import`, `plyshell export`,
-//! `plyshell bench`, `plyshell body`.
+//! `plyshell bench`, `plyshell study`, `plyshell body`.
 
 use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
@@ -142,6 +142,28 @@ enum Command {
         #[arg(long, default_value = "out/body")]
         out: PathBuf,
     },
+    /// Solve a garment scene at increasing fidelity (mesh levels × laminate / discrete plies)
+    /// and report each run's time and error against the finest discrete model: table, JSON
+    /// and error-vs-time plot.
+    Study {
+        /// Scene file (RON) with a garment.
+        scene: PathBuf,
+        /// Output directory (study.md, study.json, study.svg).
+        #[arg(long, default_value = "out/study")]
+        out: PathBuf,
+        /// Element size multipliers (comma-separated); the smallest is the reference mesh.
+        #[arg(long, value_delimiter = ',', default_value = "4,2,1")]
+        sizes: Vec<f64>,
+        /// Extra runs with `element_size: Auto((tolerance: T))` (comma-separated tolerances).
+        #[arg(long, value_delimiter = ',')]
+        tolerances: Vec<f64>,
+        /// Only the discrete ply model (no laminate runs).
+        #[arg(long)]
+        discrete_only: bool,
+        /// Also write every run's VTU/PVD and summary.json into OUT/<run>/.
+        #[arg(long)]
+        vtu: bool,
+    },
     /// Run the verification benchmarks at several mesh sizes: table, JSON and error-vs-time plot.
     Bench {
         /// Write the records as JSON here (the plot goes beside it as .svg).
@@ -173,6 +195,15 @@ fn main() -> ExitCode {
         Command::Export { scene, inp } => scene::load(&scene).map_err(|e| e.to_string()).and_then(|(s, b)| export_inp(&s, &b, &inp)),
         Command::Import { pattern, out, size, units } => import(&pattern, &out, size.as_deref(), units),
         Command::Bench { json, quick, drive } => if drive { bench::drive::run_drive(&json, quick) } else { bench::run_all(&json, quick) }.map_err(|e| e.to_string()),
+        Command::Study { scene, out, sizes, tolerances, discrete_only, vtu } => {
+            use plyshell::garment::PlyModel;
+            let ply_models = if discrete_only { vec![PlyModel::Discrete] } else { vec![PlyModel::Laminate, PlyModel::Discrete] };
+            let options = plyshell::study::StudyOptions { sizes, tolerances, ply_models, out: out.clone(), vtu };
+            plyshell::study::run_study(&scene, &options, &mut |m| warn!("{m}")).map(|rows| {
+                say!("{}", plyshell::study::markdown(&scene.display().to_string(), &rows));
+                say!("wrote {}", ["study.md", "study.json", "study.svg"].map(|f| out.join(f).display().to_string()).join(", "));
+            })
+        }
         Command::Body { measurements, pose, motion, resolution, out } => body(measurements.as_deref(), pose.as_deref(), motion.as_deref(), resolution, &out),
         Command::Fuzz { corpus, seed, count, solve_every, jobs, work, check_timeout, solve_timeout } => {
             fuzz(corpus, seed, count, solve_every, jobs, work, check_timeout, solve_timeout)

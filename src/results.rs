@@ -104,6 +104,10 @@ pub struct Summary {
     /// Buckling analysis of the perfect geometry that seeded the imperfection.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub imperfection_buckling: Option<crate::solver::BucklingReport>,
+    /// Position of every model node in the last converged state (not written to JSON; for
+    /// comparisons between runs, `plyshell study`).
+    #[serde(skip)]
+    pub final_positions: Vec<[f64; 3]>,
 }
 
 /// Peak resident set size of this process in MiB (Linux `VmHWM`).

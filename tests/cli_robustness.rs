@@ -159,3 +159,24 @@ fn progress_lines_are_printed_when_stderr_is_not_a_terminal() {
     let lines: Vec<&str> = err.lines().filter(|l| l.starts_with('[') && l.contains(" s] ") && l.contains("residual")).collect();
     assert!(lines.iter().any(|l| l.contains("step 1 'load'")) && lines.iter().any(|l| l.contains("step 2 'more'")), "progress lines: {lines:?}\nstderr: {err}");
 }
+
+/// `plyshell study` refuses a scene without a garment and bad size multipliers, and on the
+/// two-ply flap at one mesh level (discrete only: the reference alone) prints its table and
+/// writes study.md / study.json.
+#[test]
+fn study_refuses_bad_input_and_writes_its_table() {
+    let d = scratch("study");
+    let scene = write(&d, "strip.ron", STRIP);
+    let (code, _, err) = run(&["study", scene.to_str().expect("utf8"), "--out", d.join("s").to_str().expect("utf8")]);
+    assert_eq!(code, 1);
+    assert!(err.contains("no garment"), "{err}");
+    let flap = Path::new(env!("CARGO_MANIFEST_DIR")).join("garments/studies/two_ply_flap.ron");
+    let (code, _, err) = run(&["study", flap.to_str().expect("utf8"), "--sizes", "2,-1", "--out", d.join("s").to_str().expect("utf8")]);
+    assert_eq!(code, 1);
+    assert!(err.contains("positive size multipliers"), "{err}");
+    let out = d.join("flap");
+    let (code, stdout, err) = run(&["study", flap.to_str().expect("utf8"), "--sizes", "2", "--discrete-only", "--out", out.to_str().expect("utf8")]);
+    assert_eq!(code, 0, "{err}");
+    assert!(stdout.contains("| discrete h×2 (reference) |"), "{stdout}");
+    assert!(out.join("study.md").is_file() && out.join("study.json").is_file());
+}

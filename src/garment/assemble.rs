@@ -8,7 +8,8 @@ use nalgebra::Vector3;
 use std::ops::Range;
 
 use super::graph::{sampled_outline, span_segments, GarmentGraph};
-use super::mesh::{mapped_counts, mesh_polygon, PatternMesh};
+use super::mesh::{mapped_counts_graded, mesh_polygon_graded, PatternMesh};
+use super::sizing::SizeField;
 use super::spec::{GarmentSpec, SpanRef};
 use super::seam::rigid_link;
 use super::{seam_ties, SeamInfo};
@@ -52,6 +53,8 @@ pub struct GarmentMesh {
     pub patterns: Vec<PatternMesh>,
     /// Per panel, the sampled-outline segments of each outline segment (curved edges).
     pub sample_ranges: Vec<Vec<Range<usize>>>,
+    /// Per panel, the element size field its mesh follows (`garment::sizing`).
+    pub sizes: Vec<SizeField>,
 }
 
 /// Node row (pattern-mesh nodes) of a panel's named span, in span direction.
@@ -75,8 +78,8 @@ fn span_row(pattern: &PatternMesh, ranges: &[Range<usize>], panel: &super::spec:
 /// match a mapped-grid partner: where a seam joins a single straight segment of this panel to
 /// a single side of a partner meshed by the mapped grid, that side's count (matching when
 /// it is even, as the triangle split puts two element edges on each boundary piece).
-fn matching_counts(spec: &GarmentSpec, pi: usize, h: f64) -> Vec<Option<usize>> {
-    let sampled = |p: &super::spec::PanelSpec| sampled_outline(p, h).ok();
+fn matching_counts(spec: &GarmentSpec, pi: usize, sizes: &[SizeField]) -> Vec<Option<usize>> {
+    let sampled = |p: &super::spec::PanelSpec| sampled_outline(p, sizes[spec.panels.iter().position(|q| q.name == p.name).unwrap_or(pi)].base).ok();
     let Some((outline, ranges)) = sampled(&spec.panels[pi]) else { return Vec::new() };
     let mut counts = vec![None; outline.len()];
     let single = |p: &super::spec::PanelSpec, side: &SpanRef, ranges: &[Range<usize>]| -> Option<usize> {
@@ -89,9 +92,10 @@ fn matching_counts(spec: &GarmentSpec, pi: usize, h: f64) -> Vec<Option<usize>> 
             if mine.panel != spec.panels[pi].name {
                 continue;
             }
-            let Some(po) = spec.panels.iter().find(|p| p.name == other.panel) else { continue };
+            let Some(oi) = spec.panels.iter().position(|p| p.name == other.panel) else { continue };
+            let po = &spec.panels[oi];
             let Some((o_outline, o_ranges)) = sampled(po) else { continue };
-            let (Some(k), Some(ko), Some(n)) = (single(&spec.panels[pi], mine, &ranges), single(po, other, &o_ranges), mapped_counts(&o_outline, h)) else {
+            let (Some(k), Some(ko), Some(n)) = (single(&spec.panels[pi], mine, &ranges), single(po, other, &o_ranges), mapped_counts_graded(&o_outline, &sizes[oi])) else {
                 continue;
             };
             if let Some(c) = counts.get_mut(k) {
@@ -119,10 +123,16 @@ impl GarmentMesh {
     /// Validates and meshes `spec`: every panel is meshed flat at the element size, placed,
     /// and each ply is offset along the director by its position in the stack (outermost ply
     /// on the director side).
-    pub fn build(spec: &GarmentSpec, loc: &Locator, materials: &BTreeSet<String>) -> Result<Self, SceneError> {
+    ///
+    /// `sizes` gives each panel's element size field (`garment::sizing`); None: the
+    /// garment's fixed `element_size` everywhere.
+    pub fn build(spec: &GarmentSpec, loc: &Locator, materials: &BTreeSet<String>, sizes: Option<Vec<SizeField>>) -> Result<Self, SceneError> {
         let graph = GarmentGraph::validate(spec, loc, materials)?;
         super::laminate::check(spec, loc)?;
-        let h = spec.element_size;
+        let sizes = sizes.unwrap_or_else(|| vec![SizeField::uniform(spec.nominal_size()); spec.panels.len()]);
+        if sizes.len() != spec.panels.len() {
+            return Err(loc.at(None, Some("element_size"), "garment.element_size", format!("{} size fields for {} panels", sizes.len(), spec.panels.len())));
+        }
         let mut parts = Vec::new();
         let mut patterns = Vec::new();
         let mut sample_ranges = Vec::new();
@@ -135,9 +145,10 @@ impl GarmentMesh {
             if !(g[0].is_finite() && g[1].is_finite()) || g[0].hypot(g[1]) == 0.0 {
                 return Err(loc.at(Some(&p.name), Some("grain"), format!("{field}.grain"), "expected a non-zero grain direction"));
             }
+            let h = sizes[pi].base;
             let (outline, ranges) = sampled_outline(p, h).map_err(|e| loc.at(Some(&p.name), Some("curves"), format!("{field}.curves"), format!("panel \"{}\": {e}", p.name)))?;
-            let pattern = mesh_polygon(&outline, h, &matching_counts(spec, pi, h), p.grain).map_err(|e| loc.at(Some(&p.name), Some("outline"), format!("{field}.outline"), format!("panel \"{}\": {e}", p.name)))?;
-            let fd = 1e-6 * h;
+            let pattern = mesh_polygon_graded(&outline, &sizes[pi], &matching_counts(spec, pi, &sizes), p.grain).map_err(|e| loc.at(Some(&p.name), Some("outline"), format!("{field}.outline"), format!("panel \"{}\": {e}", p.name)))?;
+            let fd = 1e-6 * sizes[pi].min();
             let mid: Vec<Vector3<f64>> = pattern.uv.iter().map(|&q| p.placement.map(q)).collect();
             let dirs: Vec<Vector3<f64>> = pattern.uv.iter().map(|&q| p.placement.director(q, fd)).collect();
             let grains: Vec<Vector3<f64>> = pattern
@@ -191,7 +202,7 @@ impl GarmentMesh {
             patterns.push(pattern);
             sample_ranges.push(ranges);
         }
-        Ok(Self { graph, parts, patterns, sample_ranges })
+        Ok(Self { graph, parts, patterns, sample_ranges, sizes })
     }
 
     /// Global part index of (panel, ply), given the index of the first garment part.
@@ -265,7 +276,7 @@ impl GarmentMesh {
         for l in &spec.stitch_lines {
             let Some(pi) = panel_index(&l.panel) else { continue };
             let pattern = &self.patterns[pi];
-            let near: Vec<usize> = (0..pattern.uv.len()).filter(|&n| distance_to_polyline(pattern.uv[n], &l.points) <= 0.5 * spec.element_size).collect();
+            let near: Vec<usize> = (0..pattern.uv.len()).filter(|&n| distance_to_polyline(pattern.uv[n], &l.points) <= 0.5 * self.sizes[pi].at(pattern.uv[n])).collect();
             if near.is_empty() {
                 return Err(loc.at(Some(&l.name), Some("points"), format!("garment.stitch_lines[{}].points", l.name), format!("stitch line \"{}\" passes no mesh node of panel \"{}\"", l.name, l.panel)));
             }
@@ -329,7 +340,13 @@ impl GarmentMesh {
                 }
             }
         }
-        super::export::GarmentLayout { panels: spec.panels.iter().map(|p| p.name.clone()).collect(), plies, ply_thickness, materials, part_tags, part_plies, flat, pattern_uv }
+        let mut part_element_size = vec![Vec::new(); first_part];
+        for gp in &self.parts {
+            let pat = &self.patterns[gp.panel];
+            let field = &self.sizes[gp.panel];
+            part_element_size.push(pat.quads.iter().map(|q| field.at(q.iter().fold([0.0, 0.0], |s, &n| [s[0] + 0.25 * pat.uv[n][0], s[1] + 0.25 * pat.uv[n][1]]))).collect());
+        }
+        super::export::GarmentLayout { panels: spec.panels.iter().map(|p| p.name.clone()).collect(), plies, ply_thickness, materials, part_tags, part_plies, flat, pattern_uv, part_element_size }
     }
 
     /// Warnings for seams that look sewn crossed: with each side's row as given (`reversed`),

@@ -34,6 +34,9 @@ pub struct GarmentLayout {
     /// Pattern coordinates (u, v) of each model node in its panel's flat pattern (m), or None
     /// for nodes outside the garment.
     pub pattern_uv: Vec<Option<[f64; 2]>>,
+    /// Target element size (m) of each quad of each model part (the panel's size field at
+    /// the quad's pattern centroid, `garment::sizing`); empty outside the garment.
+    pub part_element_size: Vec<Vec<f64>>,
 }
 
 /// The garment's quads as a textured surface for OBJ and glTF: one group `panel/ply` per
@@ -84,7 +87,8 @@ pub fn garment_surface(model: &Model, layout: &GarmentLayout, position: impl Fn(
 /// forces zero). Cell data: `panel`, `ply`, `material`, `part`, `seam` (−1 where it does
 /// not apply; ply and material −1 on a laminated panel), `ply_mask` (bit i: the cell stands
 /// for ply id i — one bit per ply, all its plies' bits on a laminate) and the force per unit
-/// length (quads: zero). Field data (with a layout): by ply
+/// length (quads: zero), and `element_size` (m, the target size of the panel's size field at
+/// the quad, `garment::sizing`; 0 on seam lines and outside the garment). Field data (with a layout): by ply
 /// id, `ply_names` (UTF-8, each name ended by a NUL byte) and `ply_thickness` (m); likewise
 /// `panel_names` and `material_names`. `extra_point_data` (name, components, values per
 /// model node) is appended to the point data: the contact terms' `contact_pressure`,
@@ -135,6 +139,17 @@ pub fn write_garment_vtu(
     let ply_mask: Vec<i32> = model.elements.iter().map(|e| mask_of(e.part)).chain(std::iter::repeat_n(0, lines.len())).collect();
     let seam: Vec<i32> = std::iter::repeat_n(-1, n_q).chain(seam_id).collect();
     let force: Vec<f64> = std::iter::repeat_n(0.0, 3 * n_q).chain(line_force.iter().flat_map(|f| [f.x, f.y, f.z])).collect();
+    let element_size: Vec<f64> = model
+        .elements
+        .iter()
+        .enumerate()
+        .map(|(e, el)| {
+            let sizes = layout.and_then(|l| l.part_element_size.get(el.part));
+            let first = model.parts.get(el.part).map_or(0, |p| p.first_element);
+            sizes.and_then(|v| v.get(e.wrapping_sub(first))).copied().unwrap_or(0.0)
+        })
+        .chain(std::iter::repeat_n(0.0, lines.len()))
+        .collect();
     let utilisation: Vec<f64> = std::iter::repeat_n(0.0, n_q).chain(line_util).collect();
     let opening: Vec<f64> = std::iter::repeat_n(0.0, n_q).chain(line_open).collect();
     let displacement: Vec<f64> = (0..model.n_nodes())
@@ -154,6 +169,7 @@ pub fn write_garment_vtu(
             DataArray { name: "seam_force_per_length", components: 3, values: &force },
             DataArray { name: "seam_utilisation", components: 1, values: &utilisation },
             DataArray { name: "seam_opening", components: 1, values: &opening },
+            DataArray { name: "element_size", components: 1, values: &element_size },
         ],
         int_cell_data: vec![("panel", int(0)), ("ply", int(1)), ("material", int(2)), ("part", part), ("seam", seam), ("ply_mask", ply_mask)],
         field_data: layout.map_or_else(Vec::new, |l| {

@@ -230,8 +230,14 @@ impl GarmentGraph {
     /// is dangling (unknown panel or edge), spans of different length beyond
     /// `span_tolerance`, and spans used by two seams (overlap).
     pub fn validate(spec: &GarmentSpec, loc: &Locator, materials: &BTreeSet<String>) -> Result<Self, SceneError> {
-        if !(spec.element_size.is_finite() && spec.element_size > 0.0) {
-            return Err(loc.at(None, Some("element_size"), "garment.element_size", "expected a positive element size"));
+        let h = spec.nominal_size();
+        if !(h.is_finite() && h > 0.0) {
+            let msg = match spec.element_size.problem() {
+                Some((_, m)) => m,
+                None if spec.element_size.fixed().is_none() => "Auto element size not resolved before meshing (garment::sizing)".to_string(),
+                None => "expected a positive element size".to_string(),
+            };
+            return Err(loc.at(None, Some("element_size"), "garment.element_size", msg));
         }
         for (name, ply) in &spec.plies {
             let field = format!("garment.plies[{name}]");
@@ -263,11 +269,11 @@ impl GarmentGraph {
                     p.name, p.outline[v][0], p.outline[v][1]
                 )));
             }
-            let est = super::mesh::estimate_nodes(&p.outline, spec.element_size);
+            let est = super::mesh::estimate_nodes(&p.outline, h);
             if !(est <= super::mesh::MAX_PATTERN_NODES as f64) {
                 return Err(loc.at(None, Some("element_size"), "garment.element_size", format!(
                     "element size {} is too small for panel \"{}\": its mesh would have about {est:.2e} nodes (limit {} per panel)",
-                    spec.element_size, p.name, super::mesh::MAX_PATTERN_NODES
+                    h, p.name, super::mesh::MAX_PATTERN_NODES
                 )));
             }
             let crossing = self_intersection(&p.outline).map_err(|e| err("outline", format!("panel \"{}\": {e}", p.name)))?;
@@ -283,7 +289,7 @@ impl GarmentGraph {
                     return Err(loc.at_value(&p.name, ename, format!("{field}.edges[{ename}]"), format!("panel \"{}\": edge \"{ename}\" needs two different vertices below {n}", p.name)));
                 }
             }
-            let (sampled, _) = sampled_outline(p, spec.element_size).map_err(|e| err("curves", format!("panel \"{}\": {e}", p.name)))?;
+            let (sampled, _) = sampled_outline(p, h).map_err(|e| err("curves", format!("panel \"{}\": {e}", p.name)))?;
             if self_intersection(&sampled).map_err(|e| err("curves", format!("panel \"{}\": {e}", p.name)))?.is_some() {
                 return Err(err("curves", format!("panel \"{}\": a curved edge makes the outline intersect itself", p.name)));
             }
@@ -329,7 +335,7 @@ impl GarmentGraph {
                     }
                     used[pi].push((seg, s.name.clone()));
                 }
-                let (points, ranges) = sampled_outline(p, spec.element_size).map_err(|e| loc.at(Some(&p.name), Some("curves"), format!("garment.panels[{panel}].curves"), e))?;
+                let (points, ranges) = sampled_outline(p, h).map_err(|e| loc.at(Some(&p.name), Some("curves"), format!("garment.panels[{panel}].curves"), e))?;
                 ends.push((pi, span_length(p, span.from, span.to, &points, &ranges)));
             }
             let (la, lb) = (ends[0].1, ends[1].1);
@@ -355,12 +361,12 @@ impl GarmentGraph {
             // Every point on the panel (inside its outline, or within half an element of it).
             if let Some(pi) = panel_index(&l.panel) {
                 let p = &spec.panels[pi];
-                let (outline, _) = sampled_outline(p, spec.element_size).map_err(|e| loc.at(Some(&p.name), Some("curves"), format!("garment.panels[{}].curves", p.name), e))?;
+                let (outline, _) = sampled_outline(p, h).map_err(|e| loc.at(Some(&p.name), Some("curves"), format!("garment.panels[{}].curves", p.name), e))?;
                 let m = outline.len();
                 for (k, q) in l.points.iter().enumerate() {
                     let near = q.iter().all(|v| v.is_finite())
                         && (super::mesh::point_in_polygon(*q, &outline)
-                            || (0..m).any(|i| super::mesh::point_segment_distance(*q, outline[i], outline[(i + 1) % m]) <= 0.5 * spec.element_size));
+                            || (0..m).any(|i| super::mesh::point_segment_distance(*q, outline[i], outline[(i + 1) % m]) <= 0.5 * h));
                     if !near {
                         return Err(loc.at(Some(&l.name), Some("points"), format!("{field}.points[{k}]"), format!(
                             "stitch line \"{}\": point {k} ({}, {}) lies outside panel \"{}\"",

@@ -21,6 +21,8 @@
 use spade::{ConstrainedDelaunayTriangulation, Point2, RefinementParameters, AngleLimit, Triangulation};
 use std::collections::HashMap;
 
+use super::sizing::SizeField;
+
 /// A flat quad mesh of one pattern piece.
 #[derive(Clone, Debug)]
 pub struct PatternMesh {
@@ -62,6 +64,17 @@ fn convex_quad(o: &[[f64; 2]]) -> bool {
 /// [`super::graph::MAX_COORDINATE`], or when the mesh would have more than
 /// [`MAX_PATTERN_NODES`] nodes ([`estimate_nodes`]) or a requested segment count is absurd.
 pub fn mesh_polygon(outline: &[[f64; 2]], h: f64, segments: &[Option<usize>], grain: [f64; 2]) -> Result<PatternMesh, String> {
+    mesh_polygon_graded(outline, &SizeField::uniform(h), segments, grain)
+}
+
+/// [`mesh_polygon`] following a size field (`garment::sizing`): the mapped grid spaces its
+/// node lines by the field along the sides (each direction graded by the refinements of the
+/// sides it crosses, [`graded_parameters`]); the triangle split samples each outline segment
+/// by the field, keeps grain-core cells only where the field is its base size, and lets the
+/// constrained Delaunay refinement grade the band between (Ruppert's refinement grades from
+/// short boundary segments inwards). A uniform field gives exactly the mesh of that size.
+pub fn mesh_polygon_graded(outline: &[[f64; 2]], field: &SizeField, segments: &[Option<usize>], grain: [f64; 2]) -> Result<PatternMesh, String> {
+    let h = field.min();
     if !(h.is_finite() && h > 0.0) {
         return Err("the element size must be positive".into());
     }
@@ -91,11 +104,19 @@ pub fn mesh_polygon(outline: &[[f64; 2]], h: f64, segments: &[Option<usize>], gr
     if requested > MAX_PATTERN_NODES {
         return Err(format!("{requested} element edges requested along the outline (limit {MAX_PATTERN_NODES})"));
     }
+    if !(field.base.is_finite() && field.base >= h) {
+        return Err("the size field's base size must be finite and at least its smallest size".into());
+    }
     if convex_quad(outline) {
-        Ok(mapped(outline, h))
+        Ok(mapped(outline, field))
     } else {
-        let core = GrainCore::fit(outline, 2.0 * h, [grain[0] / g, grain[1] / g]);
-        cdt_split(outline, h, segments, &core)
+        let base = field.base;
+        let keep = |c: &[[f64; 2]; 4]| {
+            let centre = [0.25 * (c[0][0] + c[1][0] + c[2][0] + c[3][0]), 0.25 * (c[0][1] + c[1][1] + c[2][1] + c[3][1])];
+            c.iter().chain(std::iter::once(&centre)).all(|&p| field.at(p) >= base * (1.0 - 1e-9))
+        };
+        let core = GrainCore::fit(outline, 2.0 * base, [grain[0] / g, grain[1] / g], &keep);
+        cdt_split(outline, field, segments, &core)
     }
 }
 
@@ -146,7 +167,7 @@ impl GrainCore {
     /// Margin between the outline and the core, as a fraction of the cell size.
     const MARGIN: f64 = 0.6;
 
-    fn fit(o: &[[f64; 2]], size: f64, e1: [f64; 2]) -> Self {
+    fn fit(o: &[[f64; 2]], size: f64, e1: [f64; 2], keep: &dyn Fn(&[[f64; 2]; 4]) -> bool) -> Self {
         let e2 = [-e1[1], e1[0]];
         let proj = |p: [f64; 2], e: [f64; 2]| p[0] * e[0] + p[1] * e[1];
         let (mut s0, mut s1, mut t0, mut t1) = (f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY);
@@ -166,7 +187,7 @@ impl GrainCore {
                 let c = core.corners(i, j);
                 let inside = c.iter().all(|&p| point_in_polygon(p, o));
                 let clear = (0..n).all(|k| segment_square_distance(o[k], o[(k + 1) % n], &c) >= Self::MARGIN * size);
-                if inside && clear {
+                if inside && clear && keep(&c) {
                     core.cells.insert((i, j));
                 }
             }
@@ -264,24 +285,79 @@ fn segment_square_distance(a: [f64; 2], b: [f64; 2], c: &[[f64; 2]; 4]) -> f64 {
 /// Element edges along each side of the mapped grid of a convex quadrilateral outline, or
 /// None when the outline gets the triangle split.
 pub fn mapped_counts(outline: &[[f64; 2]], h: f64) -> Option<[usize; 4]> {
+    mapped_counts_graded(outline, &SizeField::uniform(h))
+}
+
+/// [`mapped_counts`] for a size field.
+pub fn mapped_counts_graded(outline: &[[f64; 2]], field: &SizeField) -> Option<[usize; 4]> {
     if !convex_quad(outline) {
         return None;
     }
-    let o = outline;
-    let n_u = ((dist(o[0], o[1]).max(dist(o[3], o[2]))) / h).ceil().max(1.0) as usize;
-    let n_v = ((dist(o[1], o[2]).max(dist(o[0], o[3]))) / h).ceil().max(1.0) as usize;
+    let (su, sv) = mapped_parameters(outline, field);
+    let (n_u, n_v) = (su.len() - 1, sv.len() - 1);
     Some([n_u, n_v, n_u, n_v])
 }
 
-/// Transfinite bilinear grid on a convex quadrilateral; opposite sides get the larger count.
-fn mapped(o: &[[f64; 2]], h: f64) -> PatternMesh {
-    let [n_u, n_v, _, _] = mapped_counts(o, h).unwrap_or([1, 1, 1, 1]);
+/// Node parameters in [0, 1] of a graded division of a pair of opposite sides: `sides` are
+/// (start, end, outline segment) of the two sides, run in the same direction; the node
+/// density at s is the larger of the two sides' length / size there, the size taken from the
+/// field without the side's own refinement (a seam grades the spacing across it, not along
+/// it). A uniform field gives ceil(L/h) equal steps, L the longer side.
+pub fn graded_parameters(sides: [([f64; 2], [f64; 2], usize); 2], field: &SizeField) -> Vec<f64> {
+    let longest = sides.iter().map(|&(a, b, _)| dist(a, b)).fold(0.0, f64::max);
+    if field.refinements.is_empty() {
+        let n = (longest / field.base).ceil().max(1.0) as usize;
+        return (0..=n).map(|i| i as f64 / n as f64).collect();
+    }
+    const SAMPLES: usize = 512;
+    let density = |s: f64| sides.iter().map(|&(a, b, k)| dist(a, b) / field.at_excluding(lerp(a, b, s), Some(k))).fold(0.0, f64::max);
+    let mut cum = vec![0.0; SAMPLES + 1];
+    for i in 0..SAMPLES {
+        let (s0, s1) = (i as f64 / SAMPLES as f64, (i + 1) as f64 / SAMPLES as f64);
+        cum[i + 1] = cum[i] + 0.5 * (density(s0) + density(s1)) / SAMPLES as f64;
+    }
+    let total = cum[SAMPLES];
+    let n = (total * (1.0 - 1e-9)).ceil().max(1.0) as usize;
+    inverse_cumulative(&cum, n)
+}
+
+/// Parameters where the piecewise-linear cumulative `cum` (on equal steps over [0, 1])
+/// reaches k/n of its total, k = 0..=n.
+fn inverse_cumulative(cum: &[f64], n: usize) -> Vec<f64> {
+    let m = cum.len() - 1;
+    let total = cum[m];
+    let mut out = Vec::with_capacity(n + 1);
+    let mut j = 0;
+    for k in 0..=n {
+        let target = total * k as f64 / n as f64;
+        while j < m - 1 && cum[j + 1] < target {
+            j += 1;
+        }
+        let span = cum[j + 1] - cum[j];
+        let f = if span > 0.0 { ((target - cum[j]) / span).clamp(0.0, 1.0) } else { 0.0 };
+        out.push(((j as f64 + f) / m as f64).clamp(0.0, 1.0));
+    }
+    out[0] = 0.0;
+    out[n] = 1.0;
+    out
+}
+
+/// The mapped grid's node parameters along u (sides 0 and 2) and v (sides 1 and 3).
+fn mapped_parameters(o: &[[f64; 2]], field: &SizeField) -> (Vec<f64>, Vec<f64>) {
+    let su = graded_parameters([(o[0], o[1], 0), (o[3], o[2], 2)], field);
+    let sv = graded_parameters([(o[1], o[2], 1), (o[0], o[3], 3)], field);
+    (su, sv)
+}
+
+/// Transfinite bilinear grid on a convex quadrilateral; opposite sides get the larger count,
+/// node lines spaced by [`graded_parameters`].
+fn mapped(o: &[[f64; 2]], field: &SizeField) -> PatternMesh {
+    let (su, sv) = mapped_parameters(o, field);
+    let (n_u, n_v) = (su.len() - 1, sv.len() - 1);
     let id = |i: usize, j: usize| j * (n_u + 1) + i;
     let mut uv = Vec::with_capacity((n_u + 1) * (n_v + 1));
-    for j in 0..=n_v {
-        let t = j as f64 / n_v as f64;
-        for i in 0..=n_u {
-            let s = i as f64 / n_u as f64;
+    for &t in &sv {
+        for &s in &su {
             let bottom = lerp(o[0], o[1], s);
             let top = lerp(o[3], o[2], s);
             uv.push(lerp(bottom, top, t));
@@ -304,21 +380,34 @@ fn mapped(o: &[[f64; 2]], h: f64) -> PatternMesh {
 
 /// Constrained Delaunay triangulation of the band between the outline and `core` with
 /// refinement, then the triangle → 3 quads split; the core cells split 2×2.
-fn cdt_split(o: &[[f64; 2]], h: f64, segments: &[Option<usize>], core: &GrainCore) -> Result<PatternMesh, String> {
+fn cdt_split(o: &[[f64; 2]], field: &SizeField, segments: &[Option<usize>], core: &GrainCore) -> Result<PatternMesh, String> {
     let n = o.len();
+    let h = field.base;
     // Boundary points: each segment in m pieces of about 2h (the split halves them).
     let mut boundary: Vec<[f64; 2]> = Vec::new();
     let mut seg_points: Vec<Vec<usize>> = Vec::with_capacity(n);
     for i in 0..n {
         let (a, b) = (o[i], o[(i + 1) % n]);
-        let m = match segments.get(i).copied().flatten() {
-            Some(n) => n.div_ceil(2).max(1),
-            None => (dist(a, b) / (2.0 * h)).ceil().max(1.0) as usize,
+        let params: Vec<f64> = match segments.get(i).copied().flatten() {
+            Some(n) => {
+                let m = n.div_ceil(2).max(1);
+                (0..=m).map(|k| k as f64 / m as f64).collect()
+            }
+            None if field.refinements.is_empty() => {
+                let m = (dist(a, b) / (2.0 * h)).ceil().max(1.0) as usize;
+                (0..=m).map(|k| k as f64 / m as f64).collect()
+            }
+            // Pieces of about twice the local size (the split halves them).
+            None => {
+                let doubled = SizeField { base: 2.0 * field.base, refinements: field.refinements.iter().map(|r| super::sizing::Refinement { h_near: 2.0 * r.h_near, ..r.clone() }).collect(), scales: None };
+                graded_parameters([(a, b, usize::MAX), (a, b, usize::MAX)], &doubled)
+            }
         };
+        let m = params.len() - 1;
         let mut row = Vec::with_capacity(m + 1);
-        for k in 0..m {
+        for &t in &params[..m] {
             row.push(boundary.len());
-            boundary.push(lerp(a, b, k as f64 / m as f64));
+            boundary.push(lerp(a, b, t));
         }
         seg_points.push(row);
     }

@@ -8,6 +8,7 @@ pub mod laminate;
 pub mod mesh;
 pub mod place;
 pub mod seam;
+pub mod sizing;
 pub mod spec;
 pub mod tape;
 

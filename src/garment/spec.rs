@@ -6,13 +6,16 @@ use std::collections::BTreeMap;
 use serde::{Deserialize, Serialize};
 
 use super::SeamKind;
+pub use super::sizing::{AutoSize, ElementSize};
 
 /// A garment: panels cut from plies and joined by seams.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct GarmentSpec {
-    /// Target element size of the panel meshes (m).
-    pub element_size: f64,
+    /// Target element size of the panel meshes: a number (m) or `Auto((tolerance: ..))`,
+    /// the size from the fabric's bending length, wrinkle wavelength, the body's curvature
+    /// and the seams (`garment::sizing`).
+    pub element_size: ElementSize,
     /// Largest relative difference in length allowed between the two spans of a seam.
     #[serde(default = "two_percent")]
     pub span_tolerance: f64,
@@ -126,6 +129,12 @@ impl GarmentSpec {
 }
 
 impl GarmentSpec {
+    /// The garment's fixed element size, or for `Auto` (resolved into per-panel size fields
+    /// by `garment::sizing` before meshing) NaN.
+    pub fn nominal_size(&self) -> f64 {
+        self.element_size.fixed().unwrap_or(f64::NAN)
+    }
+
     /// Whether `panel` is one laminated shell: `Laminate` by its own or the garment's
     /// `ply_model`, and more than one ply (a single ply is the same either way).
     pub fn is_laminate(&self, panel: &PanelSpec) -> bool {
@@ -225,6 +234,9 @@ pub struct PanelSpec {
     /// Ply fidelity of this panel (None: the garment's `ply_model`).
     #[serde(default)]
     pub ply_model: Option<PlyModel>,
+    /// Element size of this panel (None: the garment's `element_size`).
+    #[serde(default)]
+    pub element_size: Option<ElementSize>,
 }
 
 fn warp_along_v() -> [f64; 2] {

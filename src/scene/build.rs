@@ -215,6 +215,20 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
         Some(g) => Some(crate::pattern::resolve(g, base_dir).map_err(|(field, message)| loc.at(None, Some("pattern"), field, message))?),
         None => None,
     };
+    // An `Auto` element size becomes a size field per panel (`garment::sizing`); the spec
+    // then carries the smallest size as its nominal one (budget, curve sampling).
+    let mut size_fields: Option<Vec<crate::garment::sizing::SizeField>> = None;
+    let resolved = match resolved {
+        Some(mut g) => {
+            if let Some(fields) = resolve_sizes(&g, scene, &loc, base_dir, &parts, &materials)? {
+                let h = fields.iter().map(|f| f.min()).fold(f64::INFINITY, f64::min);
+                g.element_size = crate::garment::ElementSize::Fixed(h);
+                size_fields = Some(fields);
+            }
+            Some(g)
+        }
+        None => None,
+    };
     let garment = match &resolved {
         Some(g) => {
             // A ply of a fabric with its own thickness must have that thickness (as a part must).
@@ -234,7 +248,7 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
                 if p.outline.iter().flatten().any(|v| !(v.abs() <= crate::garment::graph::MAX_COORDINATE)) {
                     continue; // the garment's validation names the vertex
                 }
-                let est = crate::garment::mesh::estimate_nodes(&p.outline, g.element_size) * p.plies.len().max(1) as f64;
+                let est = crate::garment::mesh::estimate_nodes(&p.outline, g.nominal_size()) * p.plies.len().max(1) as f64;
                 let fits = if est < 1e15 { n.checked_add(est as u64).zip(e.checked_add(est as u64)) } else { None };
                 let msg = match fits {
                     Some((n2, e2)) => crate::budget::check_model(n2, e2).map(|_| (n2, e2)),
@@ -242,7 +256,7 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
                 };
                 (n, e) = msg.map_err(|m| loc.at(None, Some("element_size"), "garment.element_size", format!("panel \"{}\" at this element size: {m}", p.name)))?;
             }
-            Some((g, crate::garment::GarmentMesh::build(g, &loc, &material_names)?))
+            Some((g, crate::garment::GarmentMesh::build(g, &loc, &material_names, size_fields.take())?))
         }
         None => None,
     };
@@ -773,4 +787,84 @@ fn area_weights(x: &[Vector3<f64>], elements: &[ElementDef], part: &PartInfo) ->
         }
     }
     w.into_iter().enumerate().map(|(i, a)| (i + part.first_node, a)).collect()
+}
+
+/// The size fields of a garment whose `element_size` (its own or a panel's) is `Auto`, or
+/// None when every size is a fixed number (`garment::sizing`): per ply the bending rigidity
+/// of its material at its thickness and its areal density (the ply's, its material's, or a
+/// `Gravity` load's on a panel or `panel/ply` part using it); the scene's contact bodies
+/// (built here once more, for their surface normals) give the body curvature. Errors are
+/// located at the `element_size` that asked for `Auto`.
+fn resolve_sizes(
+    g: &crate::garment::GarmentSpec,
+    scene: &Scene,
+    loc: &Locator,
+    base_dir: &std::path::Path,
+    parts: &[PartInfo],
+    materials: &BTreeMap<&str, Arc<dyn ShellMaterial>>,
+) -> Result<Option<Vec<crate::garment::sizing::SizeField>>, SceneError> {
+    use crate::garment::sizing::{panel_field, radius_from_normals, PlyPhysics};
+    use crate::garment::ElementSize;
+    let auto = |e: &ElementSize| matches!(e, ElementSize::Auto(_));
+    if !auto(&g.element_size) && !g.panels.iter().any(|p| p.element_size.as_ref().is_some_and(auto)) {
+        // Fixed sizes: a bad panel size is reported here, the garment's by the validation.
+        for p in &g.panels {
+            if let Some((key, msg)) = p.element_size.as_ref().and_then(|e| e.problem()) {
+                let _ = key;
+                return Err(loc.at(Some(&p.name), Some("element_size"), format!("garment.panels[{}].element_size", p.name), msg));
+            }
+        }
+        if g.panels.iter().all(|p| p.element_size.is_none()) {
+            return Ok(None);
+        }
+    }
+    let bending = |ply: &str| {
+        let spec = g.plies.get(ply)?;
+        materials.get(spec.material.as_str()).map(|m| m.bending_rigidity(spec.thickness))
+    };
+    let density = |ply: &str| -> Option<f64> {
+        let spec = g.plies.get(ply)?;
+        if spec.areal_density > 0.0 {
+            return Some(spec.areal_density);
+        }
+        if let Some(d) = materials.get(spec.material.as_str()).and_then(|m| m.areal_density()) {
+            return Some(d);
+        }
+        let names: Vec<String> = g.panels.iter().filter(|p| p.plies.iter().any(|q| q == ply)).flat_map(|p| [p.name.clone(), crate::garment::laminate::alias(&p.name, ply)]).collect();
+        scene.loads.values().find_map(|l| match l {
+            LoadSpec::Gravity { part, areal_density, .. } if names.contains(part) => Some(*areal_density),
+            _ => None,
+        })
+    };
+    // The bodies alone (the contact's part list is checked by the real build later).
+    let bodies = scene.contact.as_ref().and_then(|c| {
+        let mut c = c.clone();
+        c.parts.clear();
+        crate::contact::build_contact(&c, loc, base_dir, parts).ok().map(|s| s.bodies)
+    });
+    let body_radius = |points: &[nalgebra::Vector3<f64>], reach: f64, delta: f64| -> Option<f64> {
+        let bodies = bodies.as_ref()?;
+        let mut r = f64::INFINITY;
+        for b in bodies.iter().filter(|b| !matches!(b.shape, crate::contact::body::Shape::Plane)) {
+            let normal = |x: &nalgebra::Vector3<f64>| b.proximity(x, reach).filter(|q| q.distance.abs() <= reach).map(|q| q.normal);
+            for x in points {
+                if let Some(rx) = radius_from_normals(x, delta, &normal) {
+                    r = r.min(rx);
+                }
+            }
+        }
+        r.is_finite().then_some(r)
+    };
+    let physics = PlyPhysics { bending: &bending, density: &density, body_radius: &body_radius };
+    let mut fields = Vec::with_capacity(g.panels.len());
+    for (pi, p) in g.panels.iter().enumerate() {
+        let field = panel_field(g, pi, &physics).map_err(|(key, msg)| {
+            let own = p.element_size.is_some();
+            let path = if own { format!("garment.panels[{}].element_size", p.name) } else { "garment.element_size".to_string() };
+            let path = if key == "element_size" { path } else { format!("{path}.{key}") };
+            loc.at(if own { Some(&p.name) } else { None }, Some(key), path, format!("panel \"{}\": {msg}", p.name))
+        })?;
+        fields.push(field);
+    }
+    Ok(Some(fields))
 }

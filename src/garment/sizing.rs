@@ -1,0 +1,407 @@
+//! Element size from the physics (`element_size: Auto((tolerance: ..))`): a size field per
+//! panel, in pattern coordinates, from the fabric's own length scales.
+//!
+//! A bilinear element interpolates a shape f with an error of at most h² max|f''| / 8
+//! (linear interpolation estimate, e.g. Ciarlet, *The Finite Element Method for Elliptic
+//! Problems*, 1978, Thm 3.1.6 in one dimension). Every length scale ℓ of the drape turns that
+//! into a size: a circle of radius ℓ, a decay exp(−s/ℓ) or a wave sin(s/ℓ) have
+//! |f''| = |f| / ℓ², so a relative shape error `tolerance` asks for
+//!
+//!   h = √(8 · tolerance) · ℓ_min,   ℓ_min = min(ℓ_b, λ / 2π, R_body),
+//!
+//! with
+//! - the **bending length** ℓ_b = (B / (ρ_A g))^{1/3} (Peirce 1930, "The handle of cloth",
+//!   J. Text. Inst. 21, T377; the fold size of cloth under its own weight): B the sum of the
+//!   panel's ply bending rigidities (plies free to slide — the lower bound, so that the mesh
+//!   is the same for the laminate and the discrete ply model), ρ_A the sum of their areal
+//!   densities;
+//! - the **wrinkle wavelength** of Cerda & Mahadevan (PRL 90, 074302, 2003),
+//!   λ = 2π (B / K)^{1/4}, K = T π² / L², i.e. λ = 2 √(π L) (B / T)^{1/4}, for a membrane
+//!   tension T (N/m) acting over a length L: the given `tension` over the panel's extent, or,
+//!   without one, the tension of the panel's own weight hanging over its extent L,
+//!   T = ρ_A g L, which gives λ = 2 √π L^{1/4} ℓ_b^{3/4};
+//! - the radius of curvature R_body of the contact body the panel lies on, where a body's
+//!   surface is within 2 ℓ_b of the placed panel: from the turn θ of the body's outward
+//!   normal (its distance gradient) over a tangential step δ ≤ ℓ_b, R = δ / tan θ
+//!   ([`radius_from_normals`]; the radius of the offset surface through the panel), the
+//!   smallest over the panel's outline and interior points;
+//!
+//! capped at a quarter of the panel's extent. Near seams and notches (ends of named edge
+//! spans on a straight run of the outline, or at a reflex corner) the size drops to
+//! `seam_factor` · h on the seam line or notch point and grows back linearly to h over the
+//! band width max(ℓ_b, 2h), the length over which a seam's kink relaxes under gravity. A
+//! mapped grid (convex four-sided panel) grades each direction by the refinements of the
+//! sides it crosses; other panels sample their outline by the field and let the Delaunay
+//! refinement grade inwards (`garment::mesh::mesh_polygon_graded`).
+
+use serde::{Deserialize, Serialize};
+
+use super::graph::{sampled_outline, span_segments};
+use super::spec::GarmentSpec;
+
+/// Standard gravity (m/s²).
+pub const G: f64 = 9.80665;
+
+/// Parameters of an automatic element size.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AutoSize {
+    /// Relative shape error the size aims at (0 < tolerance < 0.5): h = √(8 tolerance) ℓ_min.
+    pub tolerance: f64,
+    /// Known membrane tension (N/m) for the wrinkle wavelength; None: the panel's own weight.
+    #[serde(default)]
+    pub tension: Option<f64>,
+    /// Size on a seam line or at a notch, as a fraction of the panel's size (default 0.5;
+    /// 1 turns the refinement off).
+    #[serde(default = "half")]
+    pub seam_factor: f64,
+}
+
+fn half() -> f64 {
+    0.5
+}
+
+/// A panel's target element size: a fixed number (m) or `Auto(..)` from the physics.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub enum ElementSize {
+    /// A fixed size (m), written as a plain number.
+    Fixed(f64),
+    /// From the fabric's bending length, wrinkle wavelength, body curvature and seams.
+    Auto(AutoSize),
+}
+
+impl<'de> Deserialize<'de> for ElementSize {
+    /// A number, or `Auto((tolerance: ..))` (also `Auto(tolerance: ..)`).
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl<'de> serde::de::Visitor<'de> for V {
+            type Value = ElementSize;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("an element size in metres or Auto((tolerance: ..))")
+            }
+            fn visit_f64<E: serde::de::Error>(self, v: f64) -> Result<ElementSize, E> {
+                Ok(ElementSize::Fixed(v))
+            }
+            fn visit_i64<E: serde::de::Error>(self, v: i64) -> Result<ElementSize, E> {
+                Ok(ElementSize::Fixed(v as f64))
+            }
+            fn visit_u64<E: serde::de::Error>(self, v: u64) -> Result<ElementSize, E> {
+                Ok(ElementSize::Fixed(v as f64))
+            }
+            fn visit_seq<A: serde::de::SeqAccess<'de>>(self, mut seq: A) -> Result<ElementSize, A::Error> {
+                let a: AutoSize = seq.next_element()?.ok_or_else(|| serde::de::Error::custom("Auto needs its parameters: Auto((tolerance: ..))"))?;
+                if seq.next_element::<serde::de::IgnoredAny>()?.is_some() {
+                    return Err(serde::de::Error::custom("Auto takes one parameter struct: Auto((tolerance: ..))"));
+                }
+                Ok(ElementSize::Auto(a))
+            }
+            fn visit_map<A: serde::de::MapAccess<'de>>(self, map: A) -> Result<ElementSize, A::Error> {
+                AutoSize::deserialize(serde::de::value::MapAccessDeserializer::new(map)).map(ElementSize::Auto)
+            }
+        }
+        d.deserialize_any(V)
+    }
+}
+
+impl ElementSize {
+    /// The fixed size, if any.
+    pub fn fixed(&self) -> Option<f64> {
+        match self {
+            ElementSize::Fixed(h) => Some(*h),
+            ElementSize::Auto(_) => None,
+        }
+    }
+
+    /// What is wrong with the value, if anything: (key, message).
+    pub fn problem(&self) -> Option<(&'static str, String)> {
+        match self {
+            ElementSize::Fixed(h) => (!(h.is_finite() && *h > 0.0)).then(|| ("element_size", "expected a positive element size".to_string())),
+            ElementSize::Auto(a) => {
+                if !(a.tolerance.is_finite() && a.tolerance > 0.0 && a.tolerance < 0.5) {
+                    Some(("tolerance", format!("Auto: expected a relative tolerance between 0 and 0.5 (e.g. 0.02), found {}", a.tolerance)))
+                } else if !(a.seam_factor.is_finite() && a.seam_factor > 0.0 && a.seam_factor <= 1.0) {
+                    Some(("seam_factor", format!("Auto: expected a seam factor in (0, 1], found {}", a.seam_factor)))
+                } else if let Some(t) = a.tension.filter(|t| !(t.is_finite() && *t > 0.0)) {
+                    Some(("tension", format!("Auto: expected a positive tension (N/m), found {t}")))
+                } else {
+                    None
+                }
+            }
+        }
+    }
+}
+
+/// The length scales behind an automatic size (m), as reported.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct LengthScales {
+    /// Bending length (B/(ρ_A g))^{1/3}.
+    pub bending_length: f64,
+    /// Cerda–Mahadevan wrinkle wavelength.
+    pub wrinkle_wavelength: f64,
+    /// Smallest radius of curvature of a contact body near the panel, if any.
+    pub body_radius: Option<f64>,
+}
+
+/// One refinement: the size falls to `h_near` on a polyline (seam span) or at a point
+/// (notch), growing back linearly to the panel size over `band`.
+#[derive(Clone, Debug)]
+pub struct Refinement {
+    /// Pattern-space polyline (one point for a notch).
+    pub points: Vec<[f64; 2]>,
+    /// Outline segment the refinement lies on (None for a notch).
+    pub segment: Option<usize>,
+    /// Size on the line.
+    pub h_near: f64,
+    /// Width of the graded band (m).
+    pub band: f64,
+}
+
+/// A panel's element size as a function of pattern coordinates.
+#[derive(Clone, Debug)]
+pub struct SizeField {
+    /// Size away from seams and notches (m).
+    pub base: f64,
+    /// Seam and notch refinements.
+    pub refinements: Vec<Refinement>,
+    /// The length scales of an automatic size (None for a fixed size).
+    pub scales: Option<LengthScales>,
+}
+
+impl SizeField {
+    /// A uniform size h.
+    pub fn uniform(h: f64) -> Self {
+        Self { base: h, refinements: Vec::new(), scales: None }
+    }
+
+    /// Size at pattern point `p`.
+    pub fn at(&self, p: [f64; 2]) -> f64 {
+        self.at_excluding(p, None)
+    }
+
+    /// Size at `p` ignoring the refinement of outline segment `skip` (a mapped grid grades
+    /// each direction by the seams across it, not along it).
+    pub fn at_excluding(&self, p: [f64; 2], skip: Option<usize>) -> f64 {
+        let mut h = self.base;
+        for r in self.refinements.iter().filter(|r| skip.is_none() || r.segment != skip) {
+            let d = if r.points.len() == 1 {
+                ((p[0] - r.points[0][0]).powi(2) + (p[1] - r.points[0][1]).powi(2)).sqrt()
+            } else {
+                r.points.windows(2).map(|w| super::mesh::point_segment_distance(p, w[0], w[1])).fold(f64::INFINITY, f64::min)
+            };
+            if d < r.band {
+                h = h.min(r.h_near + (self.base - r.h_near) * d / r.band);
+            }
+        }
+        h
+    }
+
+    /// The smallest size anywhere.
+    pub fn min(&self) -> f64 {
+        self.refinements.iter().map(|r| r.h_near).fold(self.base, f64::min)
+    }
+}
+
+/// Inputs of an automatic size: per ply name its bending rigidity (N·m) and areal density
+/// (kg/m²), and the radius of curvature of the bodies near a placed pattern point set.
+pub struct PlyPhysics<'a> {
+    /// Bending rigidity of a ply (by name), if known.
+    pub bending: &'a dyn Fn(&str) -> Option<f64>,
+    /// Areal density of a ply (by name), if known.
+    pub density: &'a dyn Fn(&str) -> Option<f64>,
+    /// Smallest radius of curvature of a contact body within `reach` of the placed points
+    /// (None: no body near).
+    pub body_radius: &'a dyn Fn(&[nalgebra::Vector3<f64>], f64, f64) -> Option<f64>,
+}
+
+/// Bending length ℓ_b = (B / (ρ_A g))^{1/3} (Peirce 1930).
+pub fn bending_length(b: f64, areal_density: f64) -> f64 {
+    (b / (areal_density * G)).cbrt()
+}
+
+/// Cerda–Mahadevan wrinkle wavelength λ = 2π (B/K)^{1/4}, K = T π²/L² (PRL 2003), for
+/// bending rigidity `b`, tension `t` (N/m) over length `l`.
+pub fn wrinkle_wavelength(b: f64, t: f64, l: f64) -> f64 {
+    let k = t * std::f64::consts::PI.powi(2) / (l * l);
+    2.0 * std::f64::consts::PI * (b / k).powf(0.25)
+}
+
+/// Size from the length scales: √(8 tolerance) · min(ℓ_b, λ/2π, R_body), at most a quarter
+/// of `extent`.
+pub fn size_from_scales(tolerance: f64, s: &LengthScales, extent: f64) -> f64 {
+    let l = s.bending_length.min(s.wrinkle_wavelength / (2.0 * std::f64::consts::PI)).min(s.body_radius.unwrap_or(f64::INFINITY));
+    ((8.0 * tolerance).sqrt() * l).min(0.25 * extent)
+}
+
+/// Largest distance between two outline vertices' bounding-box corners (the panel's extent).
+fn extent(outline: &[[f64; 2]]) -> f64 {
+    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+    for p in outline {
+        for k in 0..2 {
+            lo[k] = lo[k].min(p[k]);
+            hi[k] = hi[k].max(p[k]);
+        }
+    }
+    (hi[0] - lo[0]).hypot(hi[1] - lo[1])
+}
+
+/// The size field of panel `pi` of `spec`: its own `element_size`, else the garment's. A
+/// fixed size is uniform; `Auto` follows the module doc. Errors: (key, message) of a
+/// missing bending rigidity or areal density, or of bad parameters.
+pub fn panel_field(spec: &GarmentSpec, pi: usize, physics: &PlyPhysics) -> Result<SizeField, (&'static str, String)> {
+    let p = &spec.panels[pi];
+    let size = p.element_size.as_ref().unwrap_or(&spec.element_size);
+    if let Some(e) = size.problem() {
+        return Err(e);
+    }
+    let a = match size {
+        ElementSize::Fixed(h) => return Ok(SizeField::uniform(*h)),
+        ElementSize::Auto(a) => a,
+    };
+    let (mut b, mut rho) = (0.0, 0.0);
+    for name in &p.plies {
+        b += (physics.bending)(name).filter(|x| x.is_finite() && *x > 0.0).ok_or_else(|| ("tolerance", format!("Auto: ply \"{name}\" of panel \"{}\" has no bending rigidity", p.name)))?;
+        rho += (physics.density)(name).filter(|x| x.is_finite() && *x > 0.0).ok_or_else(|| {
+            ("tolerance", format!("Auto: ply \"{name}\" of panel \"{}\" has no areal density (give the ply an `areal_density`, a fabric material, or a Gravity load)", p.name))
+        })?;
+    }
+    let l = extent(&p.outline);
+    if !(l.is_finite() && l > 0.0) {
+        return Err(("tolerance", format!("Auto: panel \"{}\" has no extent", p.name)));
+    }
+    let lb = bending_length(b, rho);
+    let tension = a.tension.unwrap_or(rho * G * l);
+    let mut scales = LengthScales { bending_length: lb, wrinkle_wavelength: wrinkle_wavelength(b, tension, l), body_radius: None };
+    let coarse = size_from_scales(a.tolerance, &scales, l);
+    // Body curvature: the placed outline sampled at the size so far.
+    let (outline, _) = sampled_outline(p, coarse).map_err(|e| ("tolerance", e))?;
+    let mut placed: Vec<nalgebra::Vector3<f64>> = outline.iter().map(|&q| p.placement.map(q)).collect();
+    placed.extend(interior_samples(&outline, coarse).into_iter().map(|q| p.placement.map(q)));
+    scales.body_radius = (physics.body_radius)(&placed, 2.0 * lb, lb);
+    let h = size_from_scales(a.tolerance, &scales, l);
+    let mut field = SizeField { base: h, refinements: Vec::new(), scales: Some(scales) };
+    if a.seam_factor < 1.0 {
+        let h_near = a.seam_factor * h;
+        let band = lb.max(2.0 * h);
+        let (pts, ranges) = sampled_outline(p, h).map_err(|e| ("tolerance", e))?;
+        let mut notch = Vec::new();
+        for s in &spec.seams {
+            for side in [&s.a, &s.b] {
+                if side.panel != p.name {
+                    continue;
+                }
+                let Some(span) = p.edges.get(&side.edge) else { continue };
+                for seg in span_segments(p, span.from, span.to) {
+                    let points: Vec<[f64; 2]> = ranges[seg].clone().chain(std::iter::once(ranges[seg].end % pts.len())).map(|k| pts[k % pts.len()]).collect();
+                    field.refinements.push(Refinement { points, segment: Some(seg), h_near, band });
+                }
+                notch.push(span.from);
+                notch.push(span.to);
+            }
+        }
+        // Notches: span ends where the outline runs straight on (a mark within an edge, as
+        // imported pattern notches are) or turns inwards (a reflex corner, where stress
+        // concentrates); a seam's ends are such points too when they lie on a straight run.
+        for span in p.edges.values() {
+            notch.push(span.from);
+            notch.push(span.to);
+        }
+        notch.sort_unstable();
+        notch.dedup();
+        let n = p.outline.len();
+        for v in notch.into_iter().filter(|&v| v < n && is_notch(&p.outline, v)) {
+            field.refinements.push(Refinement { points: vec![p.outline[v]], segment: None, h_near, band });
+        }
+    }
+    Ok(field)
+}
+
+/// Whether outline vertex `v` (counter-clockwise outline) is a notch: the outline turns there
+/// by less than 10° (a straight run) or turns clockwise (a reflex corner).
+fn is_notch(o: &[[f64; 2]], v: usize) -> bool {
+    let n = o.len();
+    let (a, b, c) = (o[(v + n - 1) % n], o[v], o[(v + 1) % n]);
+    let (d1, d2) = ([b[0] - a[0], b[1] - a[1]], [c[0] - b[0], c[1] - b[1]]);
+    let cross = d1[0] * d2[1] - d1[1] * d2[0];
+    let dot = d1[0] * d2[0] + d1[1] * d2[1];
+    let turn = cross.atan2(dot);
+    turn < 10f64.to_radians()
+}
+
+/// Grid points of spacing `h` inside an outline (for the body-curvature probe).
+fn interior_samples(outline: &[[f64; 2]], h: f64) -> Vec<[f64; 2]> {
+    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+    for p in outline {
+        for k in 0..2 {
+            lo[k] = lo[k].min(p[k]);
+            hi[k] = hi[k].max(p[k]);
+        }
+    }
+    let n = [((hi[0] - lo[0]) / h).ceil().min(200.0) as usize, ((hi[1] - lo[1]) / h).ceil().min(200.0) as usize];
+    let mut out = Vec::new();
+    for i in 0..=n[0] {
+        for j in 0..=n[1] {
+            let q = [lo[0] + (hi[0] - lo[0]) * i as f64 / n[0].max(1) as f64, lo[1] + (hi[1] - lo[1]) * j as f64 / n[1].max(1) as f64];
+            if super::mesh::point_in_polygon(q, outline) {
+                out.push(q);
+            }
+        }
+    }
+    out
+}
+
+/// Radius of curvature of a body's surface seen from point `x`: the outward normal at x and
+/// at x + δ t for two tangent directions t turn by θ = 2 asin(|Δn|/2), and the normal field
+/// of a surface of radius ρ through x turns by tan θ = δ/ρ, so ρ = δ / tan θ (exact for the
+/// distance gradient of a sphere or cylinder; the smaller of the two directions). δ starts at
+/// `delta` and is halved while θ exceeds 45°. `normal(x)` returns the body's outward normal
+/// (the gradient of its signed distance) at x, if the body is near. For a point off the
+/// surface ρ is the radius of the offset surface through it (body radius + distance).
+pub fn radius_from_normals(x: &nalgebra::Vector3<f64>, delta: f64, normal: &dyn Fn(&nalgebra::Vector3<f64>) -> Option<nalgebra::Vector3<f64>>) -> Option<f64> {
+    let n = normal(x)?;
+    let a = if n.x.abs() < 0.9 { nalgebra::Vector3::x() } else { nalgebra::Vector3::y() };
+    let t1 = n.cross(&a).normalize();
+    let t2 = n.cross(&t1);
+    let mut delta = delta;
+    for _ in 0..8 {
+        let mut dn: f64 = 0.0;
+        for t in [t1, t2] {
+            if let Some(m) = normal(&(x + t * delta)) {
+                dn = dn.max((m - n).norm());
+            }
+        }
+        let theta = 2.0 * (0.5 * dn).min(1.0).asin();
+        if theta > std::f64::consts::FRAC_PI_4 {
+            delta *= 0.5;
+            continue;
+        }
+        return (theta > 1e-9).then(|| delta / theta.tan());
+    }
+    None
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The wavelength of the reference's example (254 mm × 0.1 mm, ν = 0.5, γ = 0.10:
+    /// λ ≈ 18.3 mm): with B = E t³/12(1−ν²) and T = E t γ, λ = 2π (B L²/(T π²))^{1/4}.
+    #[test]
+    fn wrinkle_wavelength_matches_the_reference_example() {
+        let (e, t, nu, gamma, l) = (1.0e6, 1.0e-4, 0.5, 0.10, 0.254);
+        let b = e * t.powi(3) / (12.0 * (1.0 - nu * nu));
+        let lam = wrinkle_wavelength(b, e * t * gamma, l);
+        assert!((lam - 0.0183).abs() < 0.0001, "λ = {lam}");
+    }
+
+    /// A sphere seen from its surface or from outside: the radius through the point, exactly
+    /// (to rounding), also when the first step is longer than the radius.
+    #[test]
+    fn radius_from_normals_of_a_sphere() {
+        let normal = |x: &nalgebra::Vector3<f64>| Some(x.normalize());
+        for (r, delta) in [(0.1, 0.005), (0.011, 0.022)] {
+            let x = nalgebra::Vector3::new(0.0, 0.0, r);
+            let got = radius_from_normals(&x, delta, &normal).unwrap();
+            assert!((got / r - 1.0).abs() < 1e-9, "{got} vs {r}");
+        }
+    }
+}

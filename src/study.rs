@@ -1,0 +1,444 @@
+//! `plyshell study SCENE.ron`: the scene's garment solved at increasing fidelity — mesh
+//! levels (element size multipliers, or `Auto` tolerances) × ply models (laminate, discrete)
+//! — and each run's wall time and error against the finest discrete model: drape shape
+//! (RMS and largest distance between the deformed garment surfaces / garment size), seam
+//! forces, clearance to the bodies, drape coefficient where the scene measures it. Writes a
+//! Markdown table, JSON records and an error-against-time SVG, as `plyshell bench` does for
+//! the verification benchmarks.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use nalgebra::Vector3;
+use parry3d_f64::math::Vector as PVec;
+use parry3d_f64::query::PointQuery;
+use parry3d_f64::shape::TriMesh;
+use serde::Serialize;
+
+use crate::analysis::{self, RunOptions};
+use crate::garment::{ElementSize, PlyModel};
+use crate::io::plot::{plot_xy, Series};
+use crate::results::Summary;
+use crate::scene::{self, BuiltScene, Scene};
+
+/// What to vary.
+#[derive(Clone, Debug)]
+pub struct StudyOptions {
+    /// Element size multipliers of the scene's size (an `Auto` size: tolerance × m², the
+    /// same size ratio), coarse first; the smallest is the reference mesh.
+    pub sizes: Vec<f64>,
+    /// Extra `Auto` tolerances to run (rows labelled `auto tol`), with the scene's other
+    /// `Auto` parameters (seam factor, tension) or the defaults.
+    pub tolerances: Vec<f64>,
+    /// Ply models to run (the discrete model is always run at the reference mesh).
+    pub ply_models: Vec<PlyModel>,
+    /// Output directory (table, JSON, plot; per-run VTU when `vtu`).
+    pub out: PathBuf,
+    /// Also write each run's VTU/PVD and summary.json into `out/<label>/`.
+    pub vtu: bool,
+}
+
+/// One run of the study.
+#[derive(Clone, Debug, Serialize)]
+pub struct StudyRow {
+    /// Run label, e.g. `laminate h×2`.
+    pub label: String,
+    /// Ply model ("laminate" / "discrete").
+    pub ply_model: String,
+    /// Mesh level: "h×m" or "auto tol".
+    pub mesh: String,
+    /// Smallest and largest target element size over the panels (m).
+    pub element_size: [f64; 2],
+    /// Model nodes, elements and free DOFs.
+    pub nodes: usize,
+    pub elements: usize,
+    pub dofs: usize,
+    /// Newton iterations.
+    pub newton_iterations: usize,
+    /// Scene build (meshing) and solve wall time (s).
+    pub build_s: f64,
+    pub wall_s: f64,
+    /// Process CPU time of build and solve (s, all threads).
+    pub cpu_s: f64,
+    /// "completed" or the failure.
+    pub status: String,
+    /// Shape error against the reference: RMS and largest closest-point distance between
+    /// the deformed garment surfaces (both ways), over the reference garment's size.
+    pub shape_rms: f64,
+    pub shape_max: f64,
+    /// Largest relative error over the seams of the mean force per length (plies of a
+    /// seam summed), against the reference; None without seams.
+    pub seam_force_error: Option<f64>,
+    /// Mean force per length of each seam (N/m, plies summed).
+    pub seam_forces: Vec<(String, f64)>,
+    /// Smallest and mean clearance of the garment's nodes (faces) to the bodies (m), if any
+    /// body; and the difference of the mean from the reference's (m).
+    pub clearance_min: Option<f64>,
+    pub clearance_mean: Option<f64>,
+    pub clearance_error: Option<f64>,
+    /// Drape coefficient (%) and its difference from the reference (points), where measured.
+    pub drape_coefficient: Option<f64>,
+    pub drape_error: Option<f64>,
+}
+
+/// Process CPU time (user + system, s) from /proc/self/stat (Linux; 0 elsewhere).
+pub fn cpu_seconds() -> f64 {
+    let Ok(s) = std::fs::read_to_string("/proc/self/stat") else { return 0.0 };
+    // Fields after the parenthesised command name: state is field 3, utime 14, stime 15.
+    let Some(rest) = s.rfind(')').map(|i| &s[i + 1..]) else { return 0.0 };
+    let f: Vec<&str> = rest.split_whitespace().collect();
+    let ticks = |k: usize| f.get(k).and_then(|v| v.parse::<f64>().ok()).unwrap_or(0.0);
+    (ticks(11) + ticks(12)) / 100.0
+}
+
+/// The garment's deformed surface of one run: node positions and garment triangles.
+struct Surface {
+    points: Vec<Vector3<f64>>,
+    /// Garment nodes (indices into `points`).
+    nodes: Vec<usize>,
+    mesh: Option<TriMesh>,
+}
+
+impl Surface {
+    fn new(built: &BuiltScene, positions: &[[f64; 3]]) -> Self {
+        let points: Vec<Vector3<f64>> = positions.iter().map(|p| Vector3::new(p[0], p[1], p[2])).collect();
+        let garment = |n: usize| built.garment.as_ref().is_some_and(|l| l.pattern_uv.get(n).copied().flatten().is_some());
+        let nodes: Vec<usize> = (0..points.len()).filter(|&n| garment(n)).collect();
+        let tris: Vec<[u32; 3]> = built
+            .model
+            .elements
+            .iter()
+            .filter(|e| e.nodes.iter().all(|&n| garment(n)))
+            .flat_map(|e| {
+                let q = e.nodes.map(|n| n as u32);
+                [[q[0], q[1], q[2]], [q[0], q[2], q[3]]]
+            })
+            .collect();
+        let vertices = points.iter().map(|p| PVec::new(p.x, p.y, p.z)).collect();
+        let mesh = TriMesh::new(vertices, tris).ok();
+        Self { points, nodes, mesh }
+    }
+
+    /// Distances of this surface's garment nodes to `other`'s surface.
+    fn distances_to(&self, other: &Surface) -> Vec<f64> {
+        use rayon::prelude::*;
+        let Some(m) = &other.mesh else { return vec![f64::INFINITY; self.nodes.len()] };
+        self.nodes
+            .par_iter()
+            .map(|&n| {
+                let p = self.points[n];
+                let q = m.project_local_point(PVec::new(p.x, p.y, p.z), false).point;
+                (Vector3::new(q.x, q.y, q.z) - p).norm()
+            })
+            .collect()
+    }
+
+    /// Diagonal of the garment nodes' bounding box.
+    fn size(&self) -> f64 {
+        let (mut lo, mut hi) = (Vector3::repeat(f64::INFINITY), Vector3::repeat(f64::NEG_INFINITY));
+        for &n in &self.nodes {
+            lo = lo.inf(&self.points[n]);
+            hi = hi.sup(&self.points[n]);
+        }
+        (hi - lo).norm()
+    }
+}
+
+/// Shape error of `run` against `reference`: (RMS, max) of the closest-point distances of
+/// both surfaces' garment nodes to the other surface, over the reference's size.
+fn shape_error(run: &Surface, reference: &Surface) -> (f64, f64) {
+    let mut d = run.distances_to(reference);
+    d.extend(reference.distances_to(run));
+    let size = reference.size().max(1e-300);
+    let rms = (d.iter().map(|x| x * x).sum::<f64>() / d.len().max(1) as f64).sqrt();
+    let max = d.iter().copied().fold(0.0, f64::max);
+    (rms / size, max / size)
+}
+
+/// Mean force per length of each seam, the plies of a multi-ply seam (`seam/ply`) summed.
+fn seam_forces(summary: &Summary) -> Vec<(String, f64)> {
+    let mut out: Vec<(String, f64)> = Vec::new();
+    let Some(list) = summary.extra.get("seams").and_then(|v| v.as_array()) else { return out };
+    for s in list {
+        let (Some(name), Some(f)) = (s.get("name").and_then(|v| v.as_str()), s.get("force_per_length_mean").and_then(|v| v.as_f64())) else { continue };
+        let base = name.split('/').next().unwrap_or(name).to_string();
+        match out.iter_mut().find(|(n, _)| *n == base) {
+            Some(e) => e.1 += f,
+            None => out.push((base, f)),
+        }
+    }
+    out
+}
+
+/// Smallest and mean clearance of the garment's nodes to the scene's bodies: signed distance
+/// minus half the largest thickness of the node's elements.
+fn clearance(built: &BuiltScene, surface: &Surface) -> Option<(f64, f64)> {
+    let c = built.contact.as_ref()?;
+    if c.bodies.is_empty() || surface.nodes.is_empty() {
+        return None;
+    }
+    let model = &built.model;
+    let mut half = vec![0.0f64; model.n_nodes()];
+    for e in &model.elements {
+        let h = model.sections.get(e.section).map_or(0.0, |s| s.thickness);
+        for &n in &e.nodes {
+            half[n] = half[n].max(0.5 * h);
+        }
+    }
+    let offset: Vec<f64> = surface.nodes.iter().map(|&n| half[n]).collect();
+    let mut out = vec![f64::NAN; model.n_nodes()];
+    crate::contact::body::clearances(&c.bodies, &surface.nodes, &offset, |n| surface.points[n], &mut out);
+    let vals: Vec<f64> = surface.nodes.iter().map(|&n| out[n]).filter(|v| v.is_finite()).collect();
+    if vals.is_empty() {
+        return None;
+    }
+    Some((vals.iter().copied().fold(f64::INFINITY, f64::min), vals.iter().sum::<f64>() / vals.len() as f64))
+}
+
+/// A scene variant: the garment's element size scaled by `m` (or the `Auto` tolerance
+/// `tol`), its ply model set (panel overrides cleared).
+fn variant(scene: &Scene, m: Option<f64>, tol: Option<f64>, ply: PlyModel) -> Result<Scene, String> {
+    let mut s = scene.clone();
+    let g = s.garment.as_mut().ok_or("the scene has no garment to study")?;
+    let scale = |e: &ElementSize| -> ElementSize {
+        match (e, m, tol) {
+            (_, _, Some(t)) => ElementSize::Auto(match e {
+                ElementSize::Auto(a) => crate::garment::AutoSize { tolerance: t, ..a.clone() },
+                ElementSize::Fixed(_) => crate::garment::AutoSize { tolerance: t, tension: None, seam_factor: 0.5 },
+            }),
+            (ElementSize::Fixed(h), Some(m), None) => ElementSize::Fixed(h * m),
+            (ElementSize::Auto(a), Some(m), None) => ElementSize::Auto(crate::garment::AutoSize { tolerance: a.tolerance * m * m, ..a.clone() }),
+            (e, None, None) => e.clone(),
+        }
+    };
+    g.element_size = scale(&g.element_size);
+    for p in &mut g.panels {
+        p.element_size = if tol.is_some() { None } else { p.element_size.as_ref().map(scale) };
+        p.ply_model = None;
+    }
+    g.ply_model = ply;
+    Ok(s)
+}
+
+fn ply_name(p: PlyModel) -> &'static str {
+    match p {
+        PlyModel::Discrete => "discrete",
+        PlyModel::Laminate => "laminate",
+        PlyModel::Auto => "auto",
+    }
+}
+
+/// One solved variant: its row (errors not yet filled) and deformed surface.
+struct Run {
+    row: StudyRow,
+    surface: Surface,
+}
+
+#[allow(clippy::too_many_arguments)]
+fn solve(file: &str, text: &str, scene: &Scene, label: &str, mesh: String, ply: PlyModel, out: Option<PathBuf>, log: &mut dyn FnMut(&str)) -> Result<Run, String> {
+    let (c0, t0) = (cpu_seconds(), Instant::now());
+    let built = scene::build(scene, file, text).map_err(|e| format!("{label}: {e}"))?;
+    let build_s = t0.elapsed().as_secs_f64();
+    let sizes = built.garment.as_ref().map(|l| l.part_element_size.iter().flatten().copied().filter(|&h| h > 0.0).fold([f64::INFINITY, 0.0], |a, h| [a[0].min(h), a[1].max(h)])).unwrap_or([0.0; 2]);
+    log(&format!("{label}: {} nodes, {} elements, solving…", built.model.n_nodes(), built.model.elements.len()));
+    let t1 = Instant::now();
+    let (summary, status) = match analysis::run(scene, &built, &RunOptions { out_dir: out }, &mut |_| {}) {
+        Ok(s) => (s, "completed".to_string()),
+        Err(analysis::RunError::Solve { error, summary }) => (*summary, format!("failed: {error}")),
+        Err(analysis::RunError::Io(e)) => return Err(format!("{label}: {e}")),
+        Err(e) => return Err(format!("{label}: {e}")),
+    };
+    let wall_s = t1.elapsed().as_secs_f64();
+    let cpu_s = cpu_seconds() - c0;
+    let surface = Surface::new(&built, &summary.final_positions);
+    let clear = clearance(&built, &surface);
+    let drape = summary.extra.get("drape").and_then(|d| d.get("drape_coefficient_percent")).and_then(|v| v.as_f64());
+    let row = StudyRow {
+        label: label.to_string(),
+        ply_model: ply_name(ply).into(),
+        mesh,
+        element_size: sizes,
+        nodes: summary.sizes.nodes,
+        elements: summary.sizes.elements,
+        dofs: summary.sizes.dofs,
+        newton_iterations: summary.newton_iterations,
+        build_s,
+        wall_s,
+        cpu_s,
+        status,
+        shape_rms: 0.0,
+        shape_max: 0.0,
+        seam_force_error: None,
+        seam_forces: seam_forces(&summary),
+        clearance_min: clear.map(|c| c.0),
+        clearance_mean: clear.map(|c| c.1),
+        clearance_error: None,
+        drape_coefficient: drape,
+        drape_error: None,
+    };
+    log(&format!("{label}: {} DOFs, {} Newton iterations, {wall_s:.1} s wall, {cpu_s:.1} s CPU, {}", row.dofs, row.newton_iterations, row.status));
+    Ok(Run { row, surface })
+}
+
+/// Fills each row's errors against the reference run.
+fn compare(runs: &mut [Run], reference: usize) {
+    let (rs, rf, rc, rd) = {
+        let r = &runs[reference];
+        (Surface { points: r.surface.points.clone(), nodes: r.surface.nodes.clone(), mesh: r.surface.mesh.clone() }, r.row.seam_forces.clone(), r.row.clearance_mean, r.row.drape_coefficient)
+    };
+    for (i, run) in runs.iter_mut().enumerate() {
+        let (rms, max) = if i == reference { (0.0, 0.0) } else { shape_error(&run.surface, &rs) };
+        run.row.shape_rms = rms;
+        run.row.shape_max = max;
+        run.row.seam_force_error = (!rf.is_empty()).then(|| {
+            rf.iter()
+                .map(|(name, f_ref)| {
+                    let f = run.row.seam_forces.iter().find(|(n, _)| n == name).map_or(0.0, |x| x.1);
+                    (f - f_ref).abs() / f_ref.abs().max(1e-300)
+                })
+                .fold(0.0, f64::max)
+        });
+        run.row.clearance_error = run.row.clearance_mean.zip(rc).map(|(a, b)| a - b);
+        run.row.drape_error = run.row.drape_coefficient.zip(rd).map(|(a, b)| a - b);
+    }
+}
+
+/// Runs the study of the scene file `path` and writes `study.md`, `study.json` and
+/// `study.svg` into `options.out`; returns the rows (reference last).
+pub fn run_study(path: &Path, options: &StudyOptions, log: &mut dyn FnMut(&str)) -> Result<Vec<StudyRow>, String> {
+    let file = path.display().to_string();
+    let bytes = std::fs::read(path).map_err(|e| format!("{file}: cannot read the scene file: {e}"))?;
+    let text = scene::decode(&file, bytes).map_err(|e| e.to_string())?;
+    let text = scene::strip_bom(&text).to_string();
+    let base = scene::parse(&file, &text).map_err(|e| e.to_string())?;
+    let g = base.garment.as_ref().ok_or_else(|| format!("{file}: the scene has no garment to study"))?;
+    let multi_ply = g.panels.iter().any(|p| p.plies.len() > 1);
+    let mut sizes = options.sizes.clone();
+    if sizes.is_empty() || sizes.iter().any(|m| !(m.is_finite() && *m > 0.0)) {
+        return Err(format!("study: expected positive size multipliers, found {sizes:?}"));
+    }
+    if let Some(t) = options.tolerances.iter().find(|t| !(t.is_finite() && **t > 0.0 && **t < 0.5)) {
+        return Err(format!("study: expected Auto tolerances between 0 and 0.5, found {t}"));
+    }
+    sizes.sort_by(|a, b| b.total_cmp(a));
+    sizes.dedup();
+    let finest = sizes[sizes.len() - 1];
+    let plies: Vec<PlyModel> = if multi_ply { options.ply_models.clone() } else { vec![PlyModel::Discrete] };
+    std::fs::create_dir_all(&options.out).map_err(|e| format!("{}: {e}", options.out.display()))?;
+    let mut plan: Vec<(String, String, Option<f64>, Option<f64>, PlyModel)> = Vec::new();
+    for &m in &sizes {
+        for &p in &plies {
+            if m == finest && p == PlyModel::Discrete {
+                continue;
+            }
+            plan.push((format!("{} h×{m}", ply_name(p)), format!("h×{m}"), Some(m), None, p));
+        }
+    }
+    for &t in &options.tolerances {
+        for &p in &plies {
+            plan.push((format!("{} auto {t}", ply_name(p)), format!("auto {t}"), None, Some(t), p));
+        }
+    }
+    plan.push((format!("discrete h×{finest} (reference)"), format!("h×{finest}"), Some(finest), None, PlyModel::Discrete));
+    // A variant that cannot be built (e.g. a stitch line passing no node of a coarse mesh)
+    // is a failed row; the reference must build.
+    let n_plan = plan.len();
+    let mut runs = Vec::new();
+    let mut failed: Vec<(usize, StudyRow)> = Vec::new();
+    for (i, (label, mesh, m, tol, ply)) in plan.into_iter().enumerate() {
+        let sc = variant(&base, m, tol, ply)?;
+        let dir = options.vtu.then(|| options.out.join(label.replace([' ', '×', '(', ')'], "_").replace("__", "_").trim_matches('_').to_string()));
+        match solve(&file, &text, &sc, &label, mesh.clone(), ply, dir, log) {
+            Ok(r) => runs.push((i, r)),
+            Err(e) if i + 1 < n_plan => {
+                log(&e);
+                failed.push((i, failed_row(label, mesh, ply, e)));
+            }
+            Err(e) => return Err(e),
+        }
+    }
+    let mut solved: Vec<Run> = Vec::with_capacity(runs.len());
+    let mut order: Vec<usize> = Vec::with_capacity(n_plan);
+    for (i, r) in runs {
+        order.push(i);
+        solved.push(r);
+    }
+    let reference = solved.len() - 1;
+    compare(&mut solved, reference);
+    let mut rows: Vec<(usize, StudyRow)> = order.into_iter().zip(solved.into_iter().map(|r| r.row)).collect();
+    rows.extend(failed);
+    rows.sort_by_key(|r| r.0);
+    let rows: Vec<StudyRow> = rows.into_iter().map(|r| r.1).collect();
+    write_reports(&options.out, &file, &rows)?;
+    Ok(rows)
+}
+
+/// The row of a variant that could not be built: its error, no sizes, NaN errors.
+fn failed_row(label: String, mesh: String, ply: PlyModel, error: String) -> StudyRow {
+    StudyRow {
+        label,
+        ply_model: ply_name(ply).into(),
+        mesh,
+        element_size: [f64::NAN; 2],
+        nodes: 0,
+        elements: 0,
+        dofs: 0,
+        newton_iterations: 0,
+        build_s: 0.0,
+        wall_s: 0.0,
+        cpu_s: 0.0,
+        status: format!("failed: {error}"),
+        shape_rms: f64::NAN,
+        shape_max: f64::NAN,
+        seam_force_error: None,
+        seam_forces: Vec::new(),
+        clearance_min: None,
+        clearance_mean: None,
+        clearance_error: None,
+        drape_coefficient: None,
+        drape_error: None,
+    }
+}
+
+/// Percent with 2 decimals, or "–".
+fn pct(v: Option<f64>) -> String {
+    v.map_or("–".into(), |x| format!("{:.2}", 100.0 * x))
+}
+
+/// The Markdown table of a study.
+pub fn markdown(scene: &str, rows: &[StudyRow]) -> String {
+    let mut t = format!(
+        "# Study of `{scene}`\n\nErrors against the last row (finest mesh, discrete plies). Shape: closest-point distance between the deformed garment surfaces (both ways), RMS and max, in % of the reference garment's size; seam force: largest relative error of a seam's mean force per length (plies summed); clearance: mean clearance of the garment faces to the bodies, difference from the reference (mm); DC: drape coefficient (%), difference in points. Times: wall and process CPU (all threads) of the solve, on a shared machine.\n\n"
+    );
+    t.push_str("| run | h (mm) | nodes | DOFs | Newton | wall s | CPU s | shape RMS % | shape max % | seam force err % | clearance mm (Δ) | DC % (Δ) | status |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+    for r in rows {
+        let h = if (r.element_size[1] - r.element_size[0]).abs() <= 1e-9 * r.element_size[1] { format!("{:.1}", 1e3 * r.element_size[0]) } else { format!("{:.1}–{:.1}", 1e3 * r.element_size[0], 1e3 * r.element_size[1]) };
+        let clear = r.clearance_mean.map_or("–".into(), |c| format!("{:.1} ({:+.1})", 1e3 * c, 1e3 * r.clearance_error.unwrap_or(0.0)));
+        let dc = r.drape_coefficient.map_or("–".into(), |c| format!("{c:.1} ({:+.1})", r.drape_error.unwrap_or(0.0)));
+        t.push_str(&format!(
+            "| {} | {h} | {} | {} | {} | {:.1} | {:.1} | {:.3} | {:.3} | {} | {clear} | {dc} | {} |\n",
+            r.label, r.nodes, r.dofs, r.newton_iterations, r.wall_s, r.cpu_s, 100.0 * r.shape_rms, 100.0 * r.shape_max, pct(r.seam_force_error), r.status
+        ));
+    }
+    t
+}
+
+/// Writes `study.md`, `study.json` and `study.svg` (shape RMS error against wall time, one
+/// series per ply model; the reference's zero error is left out of the log plot).
+fn write_reports(dir: &Path, scene: &str, rows: &[StudyRow]) -> Result<(), String> {
+    let md = markdown(scene, rows);
+    crate::io::atomic::write_atomic(&dir.join("study.md"), md.as_bytes()).map_err(|e| format!("study.md: {e}"))?;
+    let json = serde_json::to_vec_pretty(&serde_json::json!({ "scene": scene, "runs": rows })).map_err(|e| e.to_string())?;
+    crate::io::atomic::write_atomic(&dir.join("study.json"), &json).map_err(|e| format!("study.json: {e}"))?;
+    let mut series: Vec<Series> = Vec::new();
+    for (name, pick) in [("laminate", "laminate h"), ("discrete", "discrete h"), ("laminate, Auto size", "laminate auto"), ("discrete, Auto size", "discrete auto")] {
+        let points: Vec<(f64, f64)> = rows.iter().filter(|r| r.label.starts_with(pick) && r.shape_rms > 0.0 && r.wall_s > 0.0).map(|r| (r.wall_s, 100.0 * r.shape_rms)).collect();
+        if !points.is_empty() {
+            series.push(Series { name: name.into(), points, reference: false });
+        }
+    }
+    if !series.is_empty() {
+        plot_xy(&dir.join("study.svg"), &format!("study: {scene}"), "wall time (s)", "shape RMS error (% of garment size)", &series, true, true).map_err(|e| format!("study.svg: {e}"))?;
+    }
+    Ok(())
+}
