@@ -1,12 +1,15 @@
 #!/usr/bin/env python3
 """Renders a garment on its body to a PNG with the standard library only: the body OBJ
-(from `plyshell body`, outward triangles) in grey and the garment OBJ (`*_garment.obj` from
-`plyshell solve`/`demo`, quads or triangles) double-sided in colour, front (from +y), right
-side (from +x) and oblique orthographic views, z up, Lambert shading with a z-buffer.
+(from `plyshell body`, outward triangles) in grey and the garment — an OBJ
+(`*_garment.obj` from `plyshell solve`/`demo`) or a shell VTU of `plyshell solve` (binary,
+uncompressed; current positions) — double-sided in colour, front (from +y), right side
+(from +x) and oblique orthographic views, z up, Lambert shading with a z-buffer.
 
-Usage: render_on_body.py BODY.obj GARMENT.obj OUT.png [PIXELS_PER_VIEW]
+Usage: render_on_body.py BODY.obj GARMENT.{obj,vtu} OUT.png [PIXELS_PER_VIEW]
 """
+import base64
 import math
+import re
 import struct
 import sys
 import zlib
@@ -21,6 +24,31 @@ def read_obj(path, tag):
             idx = [int(t.split("/")[0]) - 1 for t in line.split()[1:]]
             for k in range(1, len(idx) - 1):
                 tris.append((idx[0], idx[k], idx[k + 1], tag))
+    return verts, tris
+
+
+def read_vtu(path, tag):
+    """Points and quad/triangle cells of a binary VTU (UInt64 headers, no compression)."""
+    text = open(path).read()
+
+    def array(name):
+        m = re.search(r'<DataArray type="(\w+)"[^>]*Name="%s"[^>]*>\s*([^<]*)<' % name, text)
+        if m is None:
+            m = re.search(r'<Points>\s*<DataArray type="(\w+)"[^>]*>\s*([^<]*)<', text) if name == "Points" else None
+        kind, data = m.group(1), base64.b64decode(m.group(2).strip())
+        n = struct.unpack("<Q", data[:8])[0]
+        fmt = {"Float64": "d", "Int64": "q", "UInt8": "B", "Int32": "i"}[kind]
+        return struct.unpack("<%d%s" % (n // struct.calcsize(fmt), fmt), data[8:8 + n])
+
+    pts = array("Points")
+    verts = [tuple(pts[3 * i:3 * i + 3]) for i in range(len(pts) // 3)]
+    conn, offs = array("connectivity"), array("offsets")
+    tris, start = [], 0
+    for end in offs:
+        idx = conn[start:end]
+        for k in range(1, len(idx) - 1):
+            tris.append((idx[0], idx[k], idx[k + 1], tag))
+        start = end
     return verts, tris
 
 
@@ -90,7 +118,7 @@ def main():
     body, garment, out = sys.argv[1], sys.argv[2], sys.argv[3]
     size = int(sys.argv[4]) if len(sys.argv) > 4 else 300
     vb, tb = read_obj(body, "body")
-    vg, tg = read_obj(garment, "garment")
+    vg, tg = read_vtu(garment, "garment") if garment.endswith(".vtu") else read_obj(garment, "garment")
     off = len(vb)
     verts = vb + vg
     tris = tb + [(i + off, j + off, k + off, t) for i, j, k, t in tg]

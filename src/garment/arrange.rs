@@ -222,11 +222,12 @@ pub fn resolve(spec: &mut GarmentSpec, contact: Option<&ContactSpec>, base_dir: 
         let Placement::Around { body, point, clearance, anchor, along, turn_deg } = &panel.placement else { continue };
         let field = |key: &str| format!("garment.panels[{}].placement.{key}", panel.name);
         let (segment, side) = parse_point(point).map_err(|m| loc.at_value(&panel.name, point, field("point"), m))?;
-        if !(clearance.is_finite() && *clearance >= 0.0) {
-            return Err(loc.at(Some(&panel.name), Some("clearance"), field("clearance"), format!("expected a non-negative clearance in metres, found {clearance}")));
+        if !(clearance.is_finite() && (0.0..=1.0).contains(clearance)) {
+            return Err(loc.at(Some(&panel.name), Some("clearance"), field("clearance"), format!("expected a clearance from the body between 0 and 1 m, found {clearance}")));
         }
-        if !anchor.iter().chain([along, turn_deg]).all(|v| v.is_finite()) {
-            return Err(loc.at(Some(&panel.name), Some("anchor"), field("anchor"), "expected a finite anchor, along and turn_deg"));
+        let bound = super::graph::MAX_COORDINATE;
+        if !anchor.iter().chain([along]).all(|v| v.abs() <= bound) || !(turn_deg.abs() <= 3600.0) {
+            return Err(loc.at(Some(&panel.name), Some("anchor"), field("anchor"), format!("expected an anchor and along within ±{bound} m and turn_deg within ±3600°")));
         }
         if !bodies.contains_key(body) {
             let bodies_spec = contact.map(|c| c.bodies.as_slice()).unwrap_or_default();
