@@ -52,7 +52,7 @@ fn bad_arrangement_points_are_located() {
     println!("{e}");
     assert_eq!(e.line, line, "{e}");
     assert!(e.field == "garment.panels[thigh_outer_l].placement.point" && e.message.contains("unknown segment \"thig_l\"") && e.message.contains("thigh_l.outer"), "{e}");
-    let bad = text.replacen("Around(body: \"body\", point: \"hood", "Around(body: \"bdy\", point: \"hood", 1);
+    let bad = text.replacen("Around(body: \"body\", point: \"head.back\"", "Around(body: \"bdy\", point: \"head.back\"", 1);
     let sc = scene::parse(SUIT, &bad).unwrap_or_else(|e| panic!("{e}"));
     let e = scene::build(&sc, SUIT, &bad).err().expect("an unknown body is refused");
     println!("{e}");
@@ -62,7 +62,7 @@ fn bad_arrangement_points_are_located() {
 /// The coarse suit (the scene file as shipped: laminated plies, element size 0.1 m) sewn
 /// shut and draped to rest on the mannequin.
 #[test]
-#[ignore = "too slow for the suite: 843 nodes, 3100 free DOFs, 78 seams, but about 1.7 s per time step with the mannequin and self contact on 2 shared cores; 430 time steps (12.5 min) were still sewing (see the README)"]
+#[ignore = "not yet solved: the shipped coarse suit (843 nodes, 3100 free DOFs, 78 seams) stopped at t = 0.225 s of the 0.3 s sewing ramp (time step 1069: Δt cut below 4 dt_min, an element of front_r folded to a zero corner Jacobian), after 886 accepted time steps and 4696 Newton iterations, 449 s CPU (34 min wall at 22 % of a core on the shared machine); see the README"]
 fn nbc_suit_is_sewn_and_rests_on_the_mannequin() {
     let text = std::fs::read_to_string(SUIT).expect("garments/nbc_suit.ron");
     let (sc, built) = load(&text);

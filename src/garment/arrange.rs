@@ -154,13 +154,32 @@ pub fn wrap(body: &Mannequin, placements: &[Isometry3<f64>], arr: &Arrangement, 
     // Surface vertices of the group in this segment's rest frame, within the axial range.
     let t_lo = arr.along + v_range.0 - arr.anchor[1];
     let t_hi = arr.along + v_range.1 - arr.anchor[1];
+    // The surface's part within the slab t_lo ≤ t ≤ t_hi is bounded by the vertices inside
+    // it and the points where triangle edges cross its two planes: the radius (a norm of the
+    // point's components across the axis) is convex, so its maximum over each clipped
+    // triangle lies at one of these points.
     let to_local = seg.rest.inverse();
-    let all: Vec<Point3<f64>> = group(arr.segment).into_iter().flat_map(|g| {
+    let mut all = Vec::new();
+    let mut within = Vec::new();
+    for g in group(arr.segment) {
         let other = &body.segments[g.index()];
         let m = to_local * other.rest;
-        other.surface.vertices.iter().map(move |v| m * v).collect::<Vec<_>>()
-    }).collect();
-    let within: Vec<Point3<f64>> = all.iter().copied().filter(|p| (t_lo..=t_hi).contains(&p.coords.dot(&up))).collect();
+        let v: Vec<Point3<f64>> = other.surface.vertices.iter().map(|v| m * v).collect();
+        let t = |p: &Point3<f64>| p.coords.dot(&up);
+        within.extend(v.iter().copied().filter(|p| (t_lo..=t_hi).contains(&t(p))));
+        for tri in &other.surface.triangles {
+            for k in 0..3 {
+                let (p, q) = (v[tri[k] as usize], v[tri[(k + 1) % 3] as usize]);
+                for plane in [t_lo, t_hi] {
+                    let (dp, dq) = (t(&p) - plane, t(&q) - plane);
+                    if dp * dq < 0.0 {
+                        within.push(p + (q - p) * (dp / (dp - dq)));
+                    }
+                }
+            }
+        }
+        all.extend(v);
+    }
     let pts = if within.is_empty() { all } else { within };
     let comps: Vec<(f64, f64)> = pts.iter().map(|p| (p.coords.dot(&e1), p.coords.dot(&e2))).collect();
     let (centre, semi) = match template(arr.segment) {
@@ -302,8 +321,8 @@ mod tests {
 
     /// A 0.16 × 0.3 m panel at each template's points: every node of a 2 cm grid lies
     /// outside every segment of the body, at no less than the clearance from the named
-    /// segment's group (less 1 mm for the facets between ring vertices: the bound is exact
-    /// at the vertices, and a facet lies inside the hull of its vertices), and the closest
+    /// segment's group (less 1 mm for the facets across the ring: the template contains the
+    /// surface's vertices and edge crossings, and a facet lies inside their hull), and the closest
     /// node is within 15 mm of the clearance (the template hugs the body: a cylinder is
     /// exact at the limb's widest ring; the trunk's ellipse, grown to contain the
     /// superellipse sections (exponent 2.5, up to 7 % past their axes' ellipse), stands up to
