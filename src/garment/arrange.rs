@@ -334,7 +334,7 @@ mod tests {
         let placements = body.placements(&pose);
         let clearance = 0.02;
         let outline = [(0.0, 0.0), (0.16, 0.0), (0.16, 0.3), (0.0, 0.3)];
-        for (point, along, height) in [("thigh_l.front", -0.25, 0.3), ("shank_r.outer", -0.1, 0.3), ("upper_arm_l.outer", -0.2, 0.3), ("forearm_r.outer", -0.05, 0.3), ("torso.front", 0.0, 0.3), ("torso.back", 0.1, 0.3), ("pelvis.right", 0.0, 0.3), ("head.left", 0.1, 0.3), ("neck.back", 0.06, 0.05)] {
+        for (point, along, height) in [("thigh_l.front", -0.25, 0.3), ("shank_r.outer", -0.1, 0.3), ("upper_arm_l.outer", -0.2, 0.3), ("forearm_r.outer", -0.05, 0.3), ("torso.front", 0.0, 0.3), ("torso.back", 0.1, 0.3), ("pelvis.front", 0.05, 0.3), ("head.left", 0.1, 0.3), ("neck.back", 0.06, 0.05)] {
             let outline = [outline[0], outline[1], (0.16, height), (0.0, height)];
             let (segment, side) = parse_point(point).unwrap();
             let arr = Arrangement { segment, side, clearance, anchor: [0.08, 0.5 * height], along, turn_deg: 0.0 };
