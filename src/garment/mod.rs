@@ -1,5 +1,6 @@
 //! Garments: panels, plies and seams. Seams become master–slave ties in the shell model.
 
+pub mod arrange;
 pub mod assemble;
 pub mod compliant;
 pub mod export;

@@ -199,6 +199,43 @@ pub enum Placement {
         half_angle_deg: f64,
         pattern_apex: [f64; 2],
     },
+    /// At a named arrangement point round a mannequin contact body (`garment::arrange`):
+    /// the panel is wrapped on the point's template — a circular cylinder round a limb, an
+    /// elliptic shell round the trunk, neck or head — at `clearance` outside the segment's
+    /// surface, with the pattern point `anchor` on the point (`along` metres up the segment
+    /// axis from the segment's proximal joint). Resolved to `EllipticCylinder` before
+    /// meshing, from the body's measurements and pose.
+    Around {
+        /// Name of a contact body whose shape is a `Mannequin`.
+        body: String,
+        /// Arrangement point `SEGMENT.SIDE`, e.g. `torso.front`, `thigh_l.outer`, `head.left`
+        /// (sides: front, back, left, right, outer, inner).
+        point: String,
+        /// Distance kept from the segment's surface (m).
+        clearance: f64,
+        /// Pattern point placed on the arrangement point.
+        #[serde(default)]
+        anchor: [f64; 2],
+        /// Axial position of the anchor, up the segment axis from its proximal joint (m).
+        #[serde(default)]
+        along: f64,
+        /// Extra turn of the anchor about the segment axis (degrees, counter-clockwise seen
+        /// from the axis tip).
+        #[serde(default)]
+        turn_deg: f64,
+    },
+    /// Rolled isometrically onto an elliptic cylinder about `axis` through `origin`, with
+    /// semi-axes (a, b) along `side` and axis × side: the pattern point `anchor` lies at
+    /// origin + a·side; u runs counter-clockwise round the axis by arc length, v along the
+    /// axis; the director points outwards.
+    EllipticCylinder {
+        origin: [f64; 3],
+        axis: [f64; 3],
+        side: [f64; 3],
+        semi_axes: [f64; 2],
+        #[serde(default)]
+        anchor: [f64; 2],
+    },
 }
 
 impl Default for Placement {

@@ -212,7 +212,11 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
     let material_names: std::collections::BTreeSet<String> = materials.keys().map(|k| k.to_string()).collect();
     // A garment's pattern file fills in the outlines of its panels.
     let resolved = match &scene.garment {
-        Some(g) => Some(crate::pattern::resolve(g, base_dir).map_err(|(field, message)| loc.at(None, Some("pattern"), field, message))?),
+        Some(g) => {
+            let mut g = crate::pattern::resolve(g, base_dir).map_err(|(field, message)| loc.at(None, Some("pattern"), field, message))?;
+            crate::garment::arrange::resolve(&mut g, scene.contact.as_ref(), base_dir, &loc)?;
+            Some(g)
+        }
         None => None,
     };
     // An `Auto` element size becomes a size field per panel (`garment::sizing`); the spec
@@ -450,7 +454,7 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
             LoadSpec::EdgeMoment { moment_per_length: v, .. } => ("moment_per_length", v.to_vec()),
             LoadSpec::EdgeForce { force_per_length: v, .. } => ("force_per_length", v.to_vec()),
             LoadSpec::SurfaceTraction { traction: v, .. } => ("traction", v.to_vec()),
-            LoadSpec::Gravity { g: v, .. } | LoadSpec::SelfWeight { g: v, .. } => ("g", v.to_vec()),
+            LoadSpec::Gravity { g: v, .. } | LoadSpec::SelfWeight { g: v, .. } | LoadSpec::GarmentWeight { g: v } => ("g", v.to_vec()),
             LoadSpec::Displacement { value, .. } => ("value", vec![*value]),
             LoadSpec::Closure => ("", Vec::new()),
         };
@@ -507,6 +511,20 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
                     fixed[NODE_DOFS * n + k] = true;
                 }
                 LoadKind::Displacements(nodes.iter().map(|&n| (NODE_DOFS * n + k, *value)).collect())
+            }
+            LoadSpec::GarmentWeight { g } => {
+                if garment.is_none() {
+                    return Err(loc.at(Some(name), None, field, "GarmentWeight needs a garment (use Gravity or SelfWeight on parts)"));
+                }
+                let mut forces = Vec::new();
+                for part in &parts[garment_first_part..] {
+                    if part.areal_density <= 0.0 {
+                        return Err(loc.at(Some(name), None, field, format!("garment part \"{}\" has no areal density (give its ply an areal_density)", part.name)));
+                    }
+                    let w = v3(*g) * part.areal_density;
+                    forces.extend(area_weights(&x0, &elements, part).into_iter().map(|(n, a)| (n, w * a)));
+                }
+                LoadKind::Forces(forces)
             }
             LoadSpec::Closure => LoadKind::Forces(Vec::new()),
         };

@@ -488,6 +488,10 @@ pub enum LoadSpec {
     Displacement { set: String, dof: Dof, value: f64 },
     /// Self-weight of a part from its material's areal density (fabric) and gravity vector.
     SelfWeight { part: String, g: [f64; 3] },
+    /// Self-weight of every garment part (each panel's plies, or its laminate) from its
+    /// areal density (the ply's, or its material's), under gravity vector `g`: the
+    /// shorthand for one `SelfWeight` per panel and ply.
+    GarmentWeight { g: [f64; 3] },
     /// No force: its scale (0 → 1) closes the gaps of the seams that name it (sewing).
     Closure,
 }

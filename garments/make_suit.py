@@ -1,0 +1,441 @@
+#!/usr/bin/env python3
+"""Writes garments/nbc_suit.ron: a one-piece NBC coverall with attached hood for the
+shipped mannequin (garments/body/measurements.ron, stature 1.76 m), dressed in the A-pose
+garments/body/poses/a_pose.ron.
+
+Every panel is placed `Around` a named arrangement point of the mannequin body
+(`src/garment/arrange.rs`: cylinders round the limbs, elliptic shells round the trunk and
+head, at a clearance), so no 3D coordinate is computed here. The script only drafts the
+flat pattern from the body measurements (girths plus ease, lengths from the skeleton's
+proportions in src/mannequin/skeleton.rs) and names which edge is sewn to which, so that
+the two sides of every seam have the same length (checked below).
+
+Conventions: outlines are counter-clockwise in pattern (u, v); u runs counter-clockwise
+round the segment axis seen from its tip, v up the segment (towards the proximal joint;
+for the trunk and hood: upwards). Every panel's director points away from the body, so two
+panels meeting at a seam run along it in opposite directions: every seam has
+`reversed: true` on its b side. Right-hand pieces are the mirror images (u → −u) of the
+left-hand ones.
+
+Usage: python3 garments/make_suit.py [OUT.ron] [--element-size H] [--discrete]
+"""
+
+import math
+import sys
+
+H = 1.76  # stature (garments/body/measurements.ron)
+UPPER_ARM = 0.56 * 0.59
+FOREARM = 0.59 - UPPER_ARM
+HIP_Z = 0.81 + 0.05 * H
+KNEE_Z = 0.56 * HIP_Z
+ANKLE_Z = 0.045 * H
+LUMBAR_Z = 0.605 * H
+HEAD_Z = 0.885 * H
+
+
+class Panel:
+    def __init__(self, name, outline, edges, point, anchor, along, clearance, grain=(0.0, 1.0)):
+        self.name = name
+        self.outline = [tuple(p) for p in outline]
+        self.edges = dict(edges)  # name -> (from, to), vertex indices, counter-clockwise
+        self.point = point
+        self.anchor = anchor
+        self.along = along
+        self.clearance = clearance
+        self.grain = grain
+
+    def edge_length(self, edge):
+        a, b = self.edges[edge]
+        n = len(self.outline)
+        length, k = 0.0, a
+        while k != b:
+            p, q = self.outline[k], self.outline[(k + 1) % n]
+            length += math.hypot(q[0] - p[0], q[1] - p[1])
+            k = (k + 1) % n
+        return length
+
+    def mirrored(self, name, point):
+        """The mirror image u → −u (right-hand piece): vertex order reversed to stay
+        counter-clockwise, every edge (a, b) becomes (b', a') with i' = n − 1 − i."""
+        n = len(self.outline)
+        outline = [(-u, v) for (u, v) in reversed(self.outline)]
+        edges = {k: (n - 1 - b, n - 1 - a) for k, (a, b) in self.edges.items()}
+        return Panel(name, outline, edges, point, (-self.anchor[0], self.anchor[1]), self.along, self.clearance, (-self.grain[0], self.grain[1]))
+
+
+def f(x):
+    return f"{x:.6f}".rstrip("0").rstrip(".") if abs(x) > 1e-12 else "0.0"
+
+
+def pt(p):
+    return f"({f(p[0])}, {f(p[1])})"
+
+
+# ---------------------------------------------------------------------------------------
+# Trunk: four quarters on the trunk shell (point torso.front / torso.back, v from the waist
+# (lumbar joint) up), from below the crotch at the centre lines to the shoulders.
+C_TRUNK = 0.03
+W = 0.28                      # quarter width (hip girth 1.00 + 0.12 ease) / 4
+VB = 0.86 - LUMBAR_Z          # bottom at the sides
+CROTCH_DROP = 0.10            # the centre front/back runs down between the legs (rise)
+UC = 0.08                     # crotch curve's width
+VA = 1.29 - LUMBAR_Z          # armpit (top of the side seam)
+UNDERARM = 0.04               # each half of the underarm gusset's top edge
+ARMHOLE = 0.16                # each half of the sleeve cap
+NECK_W = 0.085                # neck opening half-width at the shoulder line
+VNF = 0.33                    # neck point at the centre front
+VNB = 0.37                    # neck point at the centre back
+NECK_INNER = 0.03             # back neckline part sewn to the hood's back gusset
+
+ua_dx = math.sqrt(UNDERARM ** 2 - 0.01 ** 2)
+p_under = (W - ua_dx, VA + 0.01)
+p_sh = (W - 0.10, p_under[1] + math.sqrt(ARMHOLE ** 2 - (p_under[0] - (W - 0.10)) ** 2))
+VS = p_sh[1]
+
+
+def trunk_left(front):
+    """front_l (CF at u = 0, side at u = W) or back_l mirrored later; returns the panel for
+    the left front quarter when `front`, else the left back quarter drawn with CB at u = 0
+    (mirrored to put the side at u = 0)."""
+    vn = VNF if front else VNB
+    outline = [
+        (0.0, VB - CROTCH_DROP),            # 0 centre line, bottom of the crotch curve
+        (0.05, VB - 0.02),                  # 1
+        (UC, VB),                           # 2 crotch / leg split
+        (W, VB),                            # 3 side bottom
+        (W, VA),                            # 4 armpit
+        p_under,                            # 5 underarm / armhole
+        p_sh,                               # 6 shoulder point
+        (NECK_W, VS),                       # 7 neck at the shoulder line
+    ]
+    edges = {"crotch": (0, 2), "leg": (2, 3), "side": (3, 4), "underarm": (4, 5), "armhole": (5, 6), "shoulder": (6, 7)}
+    if front:
+        outline += [(0.0, vn)]              # 8 centre front neck
+        edges.update({"neck": (7, 8), "centre": (8, 0)})
+    else:
+        outline += [(NECK_INNER, vn), (0.0, vn)]  # 8, 9
+        edges.update({"neck_outer": (7, 8), "neck_inner": (8, 9), "centre": (9, 0)})
+    return outline, edges
+
+
+fl_outline, fl_edges = trunk_left(True)
+# front_l: CF 1 cm left of the front point, running counter-clockwise (to the body's left).
+front_l = Panel("front_l", fl_outline, fl_edges, "torso.front", (-0.01, 0.0), 0.0, C_TRUNK)
+front_r = front_l.mirrored("front_r", "torso.front")
+bl_outline, bl_edges = trunk_left(False)
+# The back quarters: back_r runs counter-clockwise from 1 cm right of the back point to the
+# right side; drawn as the left-front shape (CB at u = 0), so back_r is that shape and
+# back_l its mirror.
+back_r = Panel("back_r", bl_outline, bl_edges, "torso.back", (-0.01, 0.0), 0.0, C_TRUNK)
+back_l = back_r.mirrored("back_l", "torso.back")
+
+# ---------------------------------------------------------------------------------------
+# Sleeves (left; the right ones mirrored): top sleeve round the outside, under sleeve and
+# underarm gusset round the inside of the upper arm, top and under sleeve of the forearm,
+# cuff. Upper arm: v from the shoulder joint (negative down the arm).
+C_ARM = 0.025
+V_CAP = -0.11
+V_GUS = V_CAP - 0.06
+V_EL = -(UPPER_ARM - 0.02)
+TOP_CAP = 2 * ARMHOLE         # top sleeve's cap width (sewn to the front and back armholes)
+TOP_W = 0.21                  # top sleeve below the gusset
+UNDER_W = 0.19                # under sleeve / gusset bottom
+GUS_TOP = 2 * UNDERARM
+s = (TOP_CAP - TOP_W) / 2
+top_upper = Panel("sleeve_top_upper_l", [
+    (s, V_EL), (s + TOP_W, V_EL), (s + TOP_W, V_GUS), (TOP_CAP, V_CAP), (TOP_CAP / 2, V_CAP), (0.0, V_CAP), (s, V_GUS),
+], {"elbow": (0, 1), "back_low": (1, 2), "back_high": (2, 3), "cap_back": (3, 4), "cap_front": (4, 5), "front_high": (5, 6), "front_low": (6, 0)},
+    "upper_arm_l.outer", (TOP_CAP / 2, 0.0), 0.0, C_ARM)
+g = (UNDER_W - GUS_TOP) / 2
+gusset = Panel("gusset_l", [
+    (0.0, V_GUS), (UNDER_W, V_GUS), (UNDER_W - g, V_CAP), (UNDER_W / 2, V_CAP), (g, V_CAP),
+], {"bottom": (0, 1), "front": (1, 2), "top_front": (2, 3), "top_back": (3, 4), "back": (4, 0)},
+    "upper_arm_l.inner", (UNDER_W / 2, 0.0), 0.0, C_ARM)
+under_upper = Panel("sleeve_under_upper_l", [
+    (0.0, V_EL), (UNDER_W, V_EL), (UNDER_W, V_GUS), (0.0, V_GUS),
+], {"elbow": (0, 1), "front": (1, 2), "top": (2, 3), "back": (3, 0)},
+    "upper_arm_l.inner", (UNDER_W / 2, 0.0), 0.0, C_ARM)
+# Forearm: v from the elbow joint.
+C_FORE = 0.03
+VF_TOP = -0.01
+VF_BOT = -0.20
+TOP_WRIST, UNDER_WRIST = 0.16, 0.14
+d = (TOP_W - TOP_WRIST) / 2
+top_fore = Panel("sleeve_top_fore_l", [
+    (d, VF_BOT), (d + TOP_WRIST / 2, VF_BOT), (d + TOP_WRIST, VF_BOT), (TOP_W, VF_TOP), (0.0, VF_TOP),
+], {"cuff_front": (0, 1), "cuff_back": (1, 2), "back": (2, 3), "elbow": (3, 4), "front": (4, 0)},
+    "forearm_l.outer", (TOP_W / 2, 0.0), 0.0, C_FORE)
+d = (UNDER_W - UNDER_WRIST) / 2
+under_fore = Panel("sleeve_under_fore_l", [
+    (d, VF_BOT), (d + UNDER_WRIST, VF_BOT), (UNDER_W, VF_TOP), (0.0, VF_TOP),
+], {"cuff": (0, 1), "front": (1, 2), "elbow": (2, 3), "back": (3, 0)},
+    "forearm_l.inner", (UNDER_W / 2, 0.0), 0.0, C_FORE)
+VC_TOP, VC_BOT = VF_BOT - 0.01, VF_BOT - 0.06
+CUFF = TOP_WRIST + UNDER_WRIST
+# The cuff: one band round the wrist, centred on the inside, closed on the outside; its top
+# edge: the under sleeve's part in the middle, the top sleeve's in two halves at the ends.
+q = TOP_WRIST / 2
+cuff = Panel("cuff_l", [
+    (0.0, VC_BOT), (CUFF, VC_BOT), (CUFF, VC_TOP), (CUFF - q, VC_TOP), (q, VC_TOP), (0.0, VC_TOP),
+], {"end_a": (1, 2), "top_front": (2, 3), "top_under": (3, 4), "top_back": (4, 5), "end_b": (5, 0)},
+    "forearm_l.inner", (CUFF / 2, 0.0), 0.0, 0.02)
+
+# ---------------------------------------------------------------------------------------
+# Legs (left; right mirrored): outer and inner thigh pieces, outer and inner shank pieces,
+# ankle cuff. Thigh: v from the hip joint.
+C_LEG = 0.025
+VT_TOP = -0.14
+VT_BOT = -(HIP_Z - KNEE_Z) + 0.015
+crotch_len = front_l.edge_length("crotch")
+leg_len = front_l.edge_length("leg")
+OUT_TOP, IN_TOP = 2 * leg_len, 2 * crotch_len
+OUT_KNEE, IN_KNEE = OUT_TOP - 0.12, IN_TOP - 0.12   # equal tapers: equal seam lengths
+d = (OUT_TOP - OUT_KNEE) / 2
+thigh_outer = Panel("thigh_outer_l", [
+    (d, VT_BOT), (d + OUT_KNEE, VT_BOT), (OUT_TOP, VT_TOP), (OUT_TOP / 2, VT_TOP), (0.0, VT_TOP),
+], {"knee": (0, 1), "back": (1, 2), "top_back": (2, 3), "top_front": (3, 4), "front": (4, 0)},
+    "thigh_l.outer", (OUT_TOP / 2, 0.0), 0.0, C_LEG)
+d = (IN_TOP - IN_KNEE) / 2
+thigh_inner = Panel("thigh_inner_l", [
+    (d, VT_BOT), (d + IN_KNEE, VT_BOT), (IN_TOP, VT_TOP), (IN_TOP / 2, VT_TOP), (0.0, VT_TOP),
+], {"knee": (0, 1), "front": (1, 2), "top_front": (2, 3), "top_back": (3, 4), "back": (4, 0)},
+    "thigh_l.inner", (IN_TOP / 2, 0.0), 0.0, C_LEG)
+# Shank: v from the knee joint.
+VS_TOP = -0.01
+VS_BOT = -(KNEE_Z - ANKLE_Z) + 0.10
+OUT_ANK, IN_ANK = OUT_KNEE - 0.05, IN_KNEE - 0.05
+d = (OUT_KNEE - OUT_ANK) / 2
+shank_outer = Panel("shank_outer_l", [
+    (d, VS_BOT), (d + OUT_ANK / 2, VS_BOT), (d + OUT_ANK, VS_BOT), (OUT_KNEE, VS_TOP), (0.0, VS_TOP),
+], {"ankle_front": (0, 1), "ankle_back": (1, 2), "back": (2, 3), "knee": (3, 4), "front": (4, 0)},
+    "shank_l.outer", (OUT_KNEE / 2, 0.0), 0.0, C_LEG)
+d = (IN_KNEE - IN_ANK) / 2
+shank_inner = Panel("shank_inner_l", [
+    (d, VS_BOT), (d + IN_ANK, VS_BOT), (IN_KNEE, VS_TOP), (0.0, VS_TOP),
+], {"ankle": (0, 1), "front": (1, 2), "knee": (2, 3), "back": (3, 0)},
+    "shank_l.inner", (IN_KNEE / 2, 0.0), 0.0, C_LEG)
+VA_TOP, VA_BOT = VS_BOT - 0.01, VS_BOT - 0.06
+ANK = OUT_ANK + IN_ANK
+q = OUT_ANK / 2
+ankle = Panel("ankle_cuff_l", [
+    (0.0, VA_BOT), (ANK, VA_BOT), (ANK, VA_TOP), (ANK - q, VA_TOP), (q, VA_TOP), (0.0, VA_TOP),
+], {"end_a": (1, 2), "top_front": (2, 3), "top_inner": (3, 4), "top_back": (4, 5), "end_b": (5, 0)},
+    "shank_l.inner", (ANK / 2, 0.0), 0.0, 0.02)
+
+# ---------------------------------------------------------------------------------------
+# Hood: left and right sides and a back gusset on the head shell (v from the head joint),
+# the sides anchored at the back so the gaps to the gusset are small; crown and upper back
+# seams close over the head; the neck edge is sewn to the trunk's neckline.
+C_HOOD = 0.03
+HV_BOT = 1.51 - HEAD_Z
+HV_TOP = 1.80 - HEAD_Z
+GUS_HALF = 0.03
+HV_GUS = 1.66 - HEAD_Z
+hood_back = Panel("hood_back", [
+    (0.0, HV_BOT), (GUS_HALF, HV_BOT), (2 * GUS_HALF, HV_BOT), (2 * GUS_HALF, HV_GUS), (GUS_HALF, HV_GUS + 0.04), (0.0, HV_GUS),
+], {"bottom_l": (0, 1), "bottom_r": (1, 2), "side_r": (2, 4), "side_l": (4, 0)},
+    "head.back", (GUS_HALF, 0.0), 0.0, C_HOOD)
+side_len = hood_back.edge_length("side_l")
+neck_front = front_l.edge_length("neck")
+neck_back = back_l.edge_length("neck_outer")
+HOOD_W = 0.24
+u0 = HOOD_W - neck_front - neck_back
+hood_l = Panel("hood_l", [
+    (u0, HV_BOT), (u0 + neck_front, HV_BOT), (HOOD_W, HV_BOT), (HOOD_W, HV_BOT + side_len),
+    (HOOD_W - 0.04, HV_TOP), (0.02, HV_TOP), (0.0, 0.05),
+], {"neck_front": (0, 1), "neck_back": (1, 2), "back_low": (2, 3), "back_high": (3, 4), "crown": (4, 5)},
+    "head.back", (HOOD_W + 0.015 + GUS_HALF, 0.0), 0.0, C_HOOD)
+hood_r = hood_l.mirrored("hood_r", "head.back")
+
+left = [top_upper, gusset, under_upper, top_fore, under_fore, cuff, thigh_outer, thigh_inner, shank_outer, shank_inner, ankle]
+right = [p.mirrored(p.name[:-2] + "_r", p.point.replace("_l.", "_r.")) for p in left]
+panels = [front_l, front_r, back_l, back_r] + left + right + [hood_l, hood_r, hood_back]
+by_name = {p.name: p for p in panels}
+
+# ---------------------------------------------------------------------------------------
+# Seams: (name, a panel, a edge, b panel, b edge, kind). Kinds as on a real NBC suit: every
+# outer seam sealed — taped (stitched and covered by a sealing tape) on the body, sleeves and
+# legs; hood seams welded (bonded); cuffs welded to the sleeve and leg ends; gussets and the
+# inner seams of the sleeves plain (under the arm, stitched only).
+TAPE = "Taped(width: 0.02, stiffness_factor: 3.0)"
+seams = [
+    ("centre_front", "front_l", "centre", "front_r", "centre", TAPE),
+    ("centre_back", "back_r", "centre", "back_l", "centre", TAPE),
+    ("side_l", "front_l", "side", "back_l", "side", TAPE),
+    ("side_r", "back_r", "side", "front_r", "side", TAPE),
+    ("shoulder_l", "front_l", "shoulder", "back_l", "shoulder", TAPE),
+    ("shoulder_r", "back_r", "shoulder", "front_r", "shoulder", TAPE),
+    ("crown", "hood_l", "crown", "hood_r", "crown", "Welded"),
+    ("hood_back_high", "hood_l", "back_high", "hood_r", "back_high", "Welded"),
+    ("hood_gusset_l", "hood_back", "side_l", "hood_l", "back_low", "Welded"),
+    ("hood_gusset_r", "hood_back", "side_r", "hood_r", "back_low", "Welded"),
+    ("neck_front_l", "front_l", "neck", "hood_l", "neck_front", TAPE),
+    ("neck_front_r", "front_r", "neck", "hood_r", "neck_front", TAPE),
+    ("neck_back_l", "back_l", "neck_outer", "hood_l", "neck_back", TAPE),
+    ("neck_back_r", "back_r", "neck_outer", "hood_r", "neck_back", TAPE),
+    ("neck_gusset_l", "back_l", "neck_inner", "hood_back", "bottom_l", TAPE),
+    ("neck_gusset_r", "back_r", "neck_inner", "hood_back", "bottom_r", TAPE),
+]
+for s in ("l", "r"):
+    top, gus, und = f"sleeve_top_upper_{s}", f"gusset_{s}", f"sleeve_under_upper_{s}"
+    tf, uf, cf = f"sleeve_top_fore_{s}", f"sleeve_under_fore_{s}", f"cuff_{s}"
+    fr, bk = f"front_{s}", f"back_{s}"
+    seams += [
+        (f"armhole_front_{s}", fr, "armhole", top, "cap_front", TAPE),
+        (f"armhole_back_{s}", bk, "armhole", top, "cap_back", TAPE),
+        (f"underarm_front_{s}", fr, "underarm", gus, "top_front", "Plain"),
+        (f"underarm_back_{s}", bk, "underarm", gus, "top_back", "Plain"),
+        (f"gusset_front_{s}", top, "front_high", gus, "front", "Plain"),
+        (f"gusset_back_{s}", top, "back_high", gus, "back", "Plain"),
+        (f"gusset_bottom_{s}", gus, "bottom", und, "top", "Plain"),
+        (f"sleeve_front_{s}", top, "front_low", und, "front", TAPE),
+        (f"sleeve_back_{s}", top, "back_low", und, "back", TAPE),
+        (f"elbow_top_{s}", top, "elbow", tf, "elbow", TAPE),
+        (f"elbow_under_{s}", und, "elbow", uf, "elbow", TAPE),
+        (f"forearm_front_{s}", tf, "front", uf, "front", TAPE),
+        (f"forearm_back_{s}", tf, "back", uf, "back", TAPE),
+        (f"cuff_under_{s}", uf, "cuff", cf, "top_under", "Welded"),
+        (f"cuff_top_front_{s}", tf, "cuff_front", cf, "top_front", "Welded"),
+        (f"cuff_top_back_{s}", tf, "cuff_back", cf, "top_back", "Welded"),
+        (f"cuff_close_{s}", cf, "end_a", cf, "end_b", "Welded"),
+    ]
+    to, ti, so, si, ak = f"thigh_outer_{s}", f"thigh_inner_{s}", f"shank_outer_{s}", f"shank_inner_{s}", f"ankle_cuff_{s}"
+    seams += [
+        (f"leg_front_{s}", fr, "leg", to, "top_front", TAPE),
+        (f"leg_back_{s}", bk, "leg", to, "top_back", TAPE),
+        (f"crotch_front_{s}", fr, "crotch", ti, "top_front", TAPE),
+        (f"crotch_back_{s}", bk, "crotch", ti, "top_back", TAPE),
+        (f"thigh_front_{s}", to, "front", ti, "front", TAPE),
+        (f"thigh_back_{s}", to, "back", ti, "back", TAPE),
+        (f"knee_outer_{s}", to, "knee", so, "knee", TAPE),
+        (f"knee_inner_{s}", ti, "knee", si, "knee", TAPE),
+        (f"shank_front_{s}", so, "front", si, "front", TAPE),
+        (f"shank_back_{s}", so, "back", si, "back", TAPE),
+        (f"ankle_inner_{s}", si, "ankle", ak, "top_inner", "Welded"),
+        (f"ankle_outer_front_{s}", so, "ankle_front", ak, "top_front", "Welded"),
+        (f"ankle_outer_back_{s}", so, "ankle_back", ak, "top_back", "Welded"),
+        (f"ankle_close_{s}", ak, "end_a", ak, "end_b", "Welded"),
+    ]
+
+# Quilting: the carbon layer is held to the shell and liner by stitch lines across the large
+# panels (horizontal lines on the trunk quarters, one down each thigh piece); they tie the
+# plies in the discrete model and vanish in the laminate.
+quilting = []
+for p in (front_l, front_r, back_l, back_r):
+    us = [u for u, _ in p.outline]
+    lo, hi = min(us), max(us)
+    for k, v in enumerate((VB + 0.12, VB + 0.30)):
+        quilting.append((f"quilt_{p.name}_{k + 1}", p.name, [(lo + 0.03, v), (hi - 0.03, v)]))
+for s_ in ("l", "r"):
+    for piece in (f"thigh_outer_{s_}", f"thigh_inner_{s_}"):
+        p = by_name[piece]
+        us = [u for u, _ in p.outline]
+        mid = 0.5 * (min(us) + max(us))
+        quilting.append((f"quilt_{piece}", piece, [(mid, VT_BOT + 0.04), (mid, VT_TOP - 0.04)]))
+
+
+def check_lengths():
+    """Both sides of every seam have the same length (1e-9 m: drafted equal)."""
+    for name, a, ea, b, eb, _ in seams:
+        la, lb = by_name[a].edge_length(ea), by_name[b].edge_length(eb)
+        if abs(la - lb) > 1e-9:
+            raise SystemExit(f"seam {name}: {a}.{ea} is {la:.4f} m, {b}.{eb} is {lb:.4f} m")
+
+
+def ron(element_size, discrete):
+    out = []
+    w = out.append
+    w("// GENERATED by garments/make_suit.py — edit the script, not this file.")
+    w("//")
+    w("// A one-piece NBC coverall with attached hood for the shipped mannequin")
+    w("// (garments/body/measurements.ron, stature 1.76 m) in the A-pose (garments/body/poses/")
+    w(f"// a_pose.ron): {len(panels)} panels (four trunk quarters; per arm a two-piece sleeve — top and")
+    w("// under sleeve of the upper arm and forearm —, an underarm gusset and a cuff; per leg outer and")
+    w("// inner thigh and shank pieces and an ankle cuff; a three-piece hood), "
+      f"{len(seams)} seams (taped on")
+    w("// the body, sleeves and legs, welded on the hood and cuffs, plain under the arms), three")
+    w("// plies as in garments/nbc_hood.ron (ripstop outer shell, carbon adsorbent layer, knit liner),")
+    w("// quilting lines on the trunk and thighs. Every panel is placed Around a named arrangement")
+    w("// point of the mannequin body (cylinders round the limbs, elliptic shells round the trunk and")
+    w("// head, a few cm off the body), sewn shut by virtual sewing (every seam closes with the")
+    w("// `sew` closure over the first 0.3 s) under gravity, then left to come to rest on the body")
+    w("// with barrier contact and friction.")
+    w("//")
+    if discrete:
+        w("// Ply model: Discrete — one shell per ply, joined at the seams and quilting lines, with")
+        w("// inter-ply and self contact (slow: see tests/nbc_suit.rs).")
+    else:
+        w("// Ply model: Laminate — the coarse default: each panel is one shell whose section stacks the")
+        w("// three plies (classical lamination theory); the quilting lines vanish. Switch to the")
+        w("// discrete three-ply model with `ply_model: Discrete` (or `python3 garments/make_suit.py")
+        w("// OUT.ron --discrete`).")
+    w(f"// Element size {element_size} m (coarse).")
+    w("Scene(")
+    w('    name: "nbc_suit",')
+    w(f'    description: "NBC coverall with hood: {len(panels)} panels, {len(seams)} seams, 3 plies; placed round the mannequin, sewn, draped to rest",')
+    w("    materials: {")
+    w('        "ripstop": Fabric((preset: Some("ripstop"))),')
+    w('        "carbon_layer": Fabric((warp_tensile: Some(1500.0), weft_tensile: Some(1200.0), shear: Some(5.0), poisson: Some(0.2),')
+    w("                                warp_bending: Some(2.0e-5), weft_bending: Some(1.6e-5), areal_density: Some(0.25), thickness: Some(0.0015))),")
+    w('        "liner": Fabric((preset: Some("knit_liner"))),')
+    w("    },")
+    w("    parts: [],")
+    w("    garment: Some((")
+    w(f"        element_size: {element_size},")
+    w(f"        ply_model: {'Discrete' if discrete else 'Laminate'},")
+    w("        plies: {")
+    w('            "outer": (material: "ripstop", thickness: 0.00035, areal_density: 0.20),')
+    w('            "carbon": (material: "carbon_layer", thickness: 0.0015, areal_density: 0.25),')
+    w('            "liner": (material: "liner", thickness: 0.0006, areal_density: 0.15),')
+    w("        },")
+    w("        panels: [")
+    for p in panels:
+        edges = ", ".join(f'"{k}": (from: {a}, to: {b})' for k, (a, b) in p.edges.items())
+        w("            (")
+        w(f'                name: "{p.name}",')
+        w(f"                outline: [{', '.join(pt(q) for q in p.outline)}],")
+        w(f"                edges: {{{edges}}},")
+        w(f"                grain: {pt(p.grain)},")
+        w('                plies: ["outer", "carbon", "liner"],')
+        w(f'                placement: Around(body: "body", point: "{p.point}", clearance: {f(p.clearance)}, anchor: {pt(p.anchor)}, along: {f(p.along)}),')
+        w("            ),")
+    w("        ],")
+    w("        seams: [")
+    for name, a, ea, b, eb, kind in seams:
+        w(f'            (name: "{name}", a: (panel: "{a}", edge: "{ea}"), b: (panel: "{b}", edge: "{eb}", reversed: true), kind: {kind}, allowance: 0.01, stitch_spacing: 0.003, closing: Some("sew")),')
+    w("        ],")
+    w("        stitch_lines: [")
+    for name, panel, pts in quilting:
+        w(f'            (name: "{name}", panel: "{panel}", points: [{", ".join(pt(q) for q in pts)}]),')
+    w("        ],")
+    w("    )),")
+    w("    loads: {")
+    w('        "sew": Closure,')
+    w('        "weight": GarmentWeight(g: (0.0, 0.0, -9.81)),')
+    w("    },")
+    w("    steps: [")
+    w('        (name: "sew", increments: 1, scale: {"sew": 1.0, "weight": 1.0}, kind: Dynamic((ramp_time: 0.3))),')
+    w("    ],")
+    w("    contact: Some((formulation: Barrier(),")
+    w("        bodies: [")
+    w('            (name: "body", shape: Mannequin(measurements: "body/measurements.ron", pose: Some("body/poses/a_pose.ron")), friction: 0.3),')
+    w("        ],")
+    w("    )),")
+    w(")")
+    return "\n".join(out) + "\n"
+
+
+if __name__ == "__main__":
+    args = sys.argv[1:]
+    element_size = 0.1
+    if "--element-size" in args:
+        i = args.index("--element-size")
+        element_size = float(args[i + 1])
+        del args[i:i + 2]
+    discrete = "--discrete" in args
+    args = [a for a in args if a != "--discrete"]
+    out = args[0] if args else "garments/nbc_suit.ron"
+    check_lengths()
+    with open(out, "w") as fh:
+        fh.write(ron(element_size, discrete))
+    print(f"{out}: {len(panels)} panels, {len(seams)} seams, {len(quilting)} quilting lines")
