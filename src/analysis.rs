@@ -154,7 +154,10 @@ pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &m
             }
             step_clock.2 += 1;
             step_clock.3 += report.iterations;
-            if let (true, Some(k), Some(p)) = (last_of_step, pose_of_step(report.step), built.protocol.as_ref()) {
+            // The end of a step: its last increment, or a Dynamic step's rest (its nominal
+            // increment count does not apply).
+            let step_ends = report.dynamics.as_ref().map_or(last_of_step, |d| d.end_of_step);
+            if let (true, Some(k), Some(p)) = (step_ends, pose_of_step(report.step), built.protocol.as_ref()) {
                 // Tie forces of rigid seams: f_int − f_ext with the contact forces in f_ext
                 // (the solver's last assembly, at this converged state).
                 let point_data: Vec<_> = solved.nodal_forces().iter().flat_map(|c| c.point_data(model, st)).collect();
@@ -189,7 +192,7 @@ pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &m
                     "measures": m,
                 }));
             }
-            if last_of_step {
+            if step_ends {
                 step_clock.1 = Instant::now();
             }
             if let Some(ev) = &report.stability_event {

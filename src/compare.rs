@@ -308,3 +308,32 @@ fn markdown(report: &Value, variants: &[(&str, String, &Value)], plots: &BTreeMa
     }
     md
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn summary(seams: &[(&str, f64)]) -> Value {
+        let seams: Vec<Value> = seams.iter().map(|(n, q)| json!({ "name": n, "force_per_length_max": q, "profile": { "s": [0.0, 0.1], "force": [q, q] } })).collect();
+        json!({ "status": "completed", "poses": { "poses": [ { "pose": "rest", "measures": { "seams": seams } } ] } })
+    }
+
+    /// Seams are matched by name: a seam in one variant only is listed as such and its other
+    /// cells are null; shared seams carry each variant's own number.
+    #[test]
+    fn seams_are_matched_by_name() {
+        let dir = std::env::temp_dir().join(format!("plyshell_compare_unit_{}", std::process::id()));
+        let (a, b) = (summary(&[("side", 1.5), ("yoke", 2.0)]), summary(&[("side", 3.0), ("raglan", 4.0)]));
+        let r = write_report(&dir, &[("A", "a.ron".into(), &a), ("B", "b.ron".into(), &b)]).expect("report");
+        let rows = r.json["seam_rows"].as_array().expect("rows");
+        let row = |s: &str| rows.iter().find(|x| x["seam"] == s).expect("row");
+        assert_eq!(row("side")["values"]["A"]["force_per_length_max"], 1.5);
+        assert_eq!(row("side")["values"]["B"]["force_per_length_max"], 3.0);
+        assert!(row("yoke")["values"]["B"].is_null() && row("raglan")["values"]["A"].is_null());
+        let partial = &r.json["seams_not_in_every_variant"];
+        assert_eq!(partial, &json!([{ "seam": "yoke", "only_in": ["A"] }, { "seam": "raglan", "only_in": ["B"] }]));
+        let md = std::fs::read_to_string(dir.join("compare.md")).expect("md");
+        assert!(md.contains("`yoke`: only in A") && md.contains("`raglan`: only in B"), "{md}");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+}

@@ -35,6 +35,9 @@ pub struct SeamMeasure {
     /// Force, utilisation and opening: means, maxima and where.
     #[serde(flatten)]
     pub summary: SeamSummary,
+    /// Resultant Σ q_s ℓ_s of the force per length over the seam (N): the total force the
+    /// master side exerts on the slave side.
+    pub resultant: [f64; 3],
     /// Profile along the seam (one entry per slave node).
     pub profile: SeamProfile,
 }
@@ -140,7 +143,8 @@ pub fn measure(
                 across: points.iter().map(|p| p.across).collect(),
                 opening: points.iter().map(|p| p.opening).collect(),
             };
-            SeamMeasure { summary: summarize(s, &points, position), profile }
+            let r: Vector3<f64> = points.iter().zip(&s.tributary).map(|(p, l)| p.force * *l).sum();
+            SeamMeasure { summary: summarize(s, &points, position), resultant: [r.x, r.y, r.z], profile }
         })
         .collect();
     StateMeasures { seams, ply_separation: layout.map(|l| ply_gaps(model, state, l)).unwrap_or_default(), strain: strain_hot_spot(model, state, layout), body: body_contact(model, state, point_data) }
@@ -255,4 +259,20 @@ fn body_contact(model: &Model, state: &State, point_data: &[(String, usize, Vec<
         }
     }
     Some(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Mohr's circle: uniaxial strain is its own principal value; a pure engineering shear γ
+    /// has principal strains ±γ/2; a rotated uniaxial strain keeps its value.
+    #[test]
+    fn principal_strain_follows_mohrs_circle() {
+        assert!((principal_max([0.01, 0.0, 0.0]) - 0.01).abs() < 1e-15);
+        assert!((principal_max([0.0, 0.0, 0.02]) - 0.01).abs() < 1e-15);
+        // ε along 30°: E11 = ε cos², E22 = ε sin², 2E12 = 2ε sin cos.
+        let (e, c, s) = (0.03f64, 30f64.to_radians().cos(), 30f64.to_radians().sin());
+        assert!((principal_max([e * c * c, e * s * s, 2.0 * e * s * c]) - e).abs() < 1e-15);
+    }
 }
