@@ -113,6 +113,7 @@ const SEAM_KEYS: [&str; 6] = ["force_per_length_max", "force_per_length_mean", "
 /// Writes `compare.json`, `compare.md` and the seam plots for the variants' summaries
 /// `(name, file, summary.json)` into `out`.
 pub fn write_report(out: &Path, variants: &[(&str, String, &Value)]) -> Result<Report, String> {
+    std::fs::create_dir_all(out).map_err(|e| format!("{}: {e}", out.display()))?;
     let poses_of = |s: &Value| -> Vec<Value> { s["poses"]["poses"].as_array().cloned().unwrap_or_default() };
     let pose_names: Vec<String> = variants.iter().map(|v| poses_of(v.2)).max_by_key(|p| p.len()).unwrap_or_default().iter().filter_map(|p| p["pose"].as_str().map(String::from)).collect();
     // Seams by name, in first-seen order, with the variants that have them.
