@@ -106,6 +106,10 @@ pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &m
         None => pseudo + shift,
     };
     let mut last_series_time = 0.0;
+    // Movement protocol: the measures of each pose at the end of its step.
+    let pose_of_step = |step: usize| built.protocol.as_ref().and_then(|p| p.poses.iter().position(|q| q.step == step));
+    let mut poses_out: Vec<serde_json::Value> = Vec::new();
+    let mut step_clock = (usize::MAX, Instant::now(), 0usize, 0usize);
     let result = solver.run(
         steps,
         &mut state,
@@ -144,6 +148,52 @@ pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &m
                     }
                 }
                 export_s += t.elapsed().as_secs_f64();
+            }
+            if step_clock.0 != report.step {
+                step_clock = (report.step, step_clock.1, 0, 0);
+            }
+            step_clock.2 += 1;
+            step_clock.3 += report.iterations;
+            // The end of a step: its last increment, or a Dynamic step's rest (its nominal
+            // increment count does not apply).
+            let step_ends = report.dynamics.as_ref().map_or(last_of_step, |d| d.end_of_step);
+            if let (true, Some(k), Some(p)) = (step_ends, pose_of_step(report.step), built.protocol.as_ref()) {
+                // Tie forces of rigid seams: f_int − f_ext with the contact forces in f_ext
+                // (the solver's last assembly, at this converged state).
+                let point_data: Vec<_> = solved.nodal_forces().iter().flat_map(|c| c.point_data(model, st)).collect();
+                let m = crate::garment::measures::measure(model, st, built.garment.as_ref(), &built.seams, Some((solved.internal_force(), solved.external_force())), &point_data);
+                let d = report.dynamics.as_ref();
+                let pose = &p.poses[k];
+                // A picture of the garment on the body in this pose (no external tools).
+                let mut picture = None;
+                if let Some(dir) = &options.out_dir {
+                    let t = Instant::now();
+                    let bodies: Vec<_> = built.contact.iter().flat_map(|c| &c.bodies).map(|b| b.at_time(solved.clock())).collect();
+                    let pic = crate::garment::picture::garment_picture(model, st, built.garment.as_ref(), &built.seams, &bodies, PICTURE_SIZE);
+                    let name = format!("{}_pose{:02}_{}.png", scene.name, k, pose.name);
+                    match crate::io::png::write_png(&dir.join(&name), pic.width, pic.height, &pic.rgb) {
+                        Ok(()) => picture = Some(name),
+                        Err(e) => io_error = io_error.take().or(Some(e.to_string())),
+                    }
+                    export_s += t.elapsed().as_secs_f64();
+                }
+                poses_out.push(serde_json::json!({
+                    "pose": pose.name,
+                    "step": report.step_name,
+                    "motion_time": pose.time,
+                    "vtu": pvd_entries.last().filter(|e| e.0 == time).map(|e| e.1.clone()),
+                    "garment_vtu": garment_entries.last().filter(|e| e.0 == time).map(|e| e.1.clone()),
+                    "picture": picture,
+                    "at_rest": d.is_none_or(|d| d.at_rest),
+                    "time_steps": step_clock.2,
+                    "newton_iterations": step_clock.3,
+                    "simulated_time": d.map_or(0.0, |d| d.time),
+                    "wall_s": step_clock.1.elapsed().as_secs_f64(),
+                    "measures": m,
+                }));
+            }
+            if step_ends {
+                step_clock.1 = Instant::now();
             }
             if let Some(ev) = &report.stability_event {
                 summary.stability_events.push((summary.increments.len(), format!("step {} increment {}: {ev}", report.step + 1, report.increment)));
@@ -195,6 +245,9 @@ pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &m
             summary.extra.insert("seams".into(), v);
         }
     }
+    if let Some(p) = &built.protocol {
+        summary.extra.insert("poses".into(), serde_json::json!({ "body": p.body, "poses": poses_out }));
+    }
     let status = match &result {
         Ok(()) => "completed".to_string(),
         Err(e) => format!("failed: {e}"),
@@ -215,6 +268,9 @@ pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &m
         let pvd_name = format!("{}.pvd", scene.name);
         summary.files = pvd_entries.iter().map(|e| e.1.clone()).collect();
         summary.files.append(&mut mode_files);
+        if let Some(serde_json::Value::Array(poses)) = summary.extra.get("poses").map(|p| &p["poses"]) {
+            summary.files.extend(poses.iter().filter_map(|q| q["picture"].as_str().map(String::from)));
+        }
         match pvd::write_pvd(&dir.join(&pvd_name), &pvd_entries) {
             Ok(()) => summary.files.push(pvd_name),
             Err(e) => problems.push(format!("{pvd_name}: {e}")),
@@ -299,6 +355,9 @@ fn write_monitor_plot(dir: &Path, scene: &Scene, built: &BuiltScene, summary: &S
     plot::plot_xy(&dir.join(&name), &scene.name, &x_label, "displacement", &series, false, false).map_err(|e| e.to_string())?;
     Ok(Some(name))
 }
+
+/// Pixels of each view in the pictures of a movement protocol's poses.
+const PICTURE_SIZE: u32 = 480;
 
 /// Most vertex positions (poses × garment nodes, 24 bytes each) kept for the glTF pose series.
 const MAX_POSE_VERTICES: usize = 5_000_000;

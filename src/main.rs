@@ -1,5 +1,5 @@
 //! Command line: `plyshell solve`, `plyshell demo`, `plyshell check`, `plyshell import`, `plyshell export`,
-//! `plyshell bench`, `plyshell study`, `plyshell body`.
+//! `plyshell bench`, `plyshell study`, `plyshell body`, `plyshell compare`.
 
 use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
@@ -164,6 +164,21 @@ enum Command {
         #[arg(long)]
         vtu: bool,
     },
+    /// Solve several garment variants (scene files with the same movement protocol) and
+    /// write a side-by-side report: per pose and seam the seam measures, per pose the strain,
+    /// clearance and body pressure, force-along-seam plots, pose pictures and each variant's
+    /// VTU/PVD series (compare.md, compare.json, plots/, VARIANT/).
+    Compare {
+        /// Scene files (RON), each with a `protocol`.
+        #[arg(required = true, num_args = 2..)]
+        scenes: Vec<PathBuf>,
+        /// Output directory.
+        #[arg(long, default_value = "out/compare")]
+        out: PathBuf,
+        /// No progress lines.
+        #[arg(long)]
+        quiet: bool,
+    },
     /// Run the verification benchmarks at several mesh sizes: table, JSON and error-vs-time plot.
     Bench {
         /// Write the records as JSON here (the plot goes beside it as .svg).
@@ -194,6 +209,7 @@ fn main() -> ExitCode {
         Command::Check { scene, json } => scene::load(&scene).map_err(|e| e.to_string()).and_then(|(s, b)| check(&scene, &s, &b, json.as_deref())),
         Command::Export { scene, inp } => scene::load(&scene).map_err(|e| e.to_string()).and_then(|(s, b)| export_inp(&s, &b, &inp)),
         Command::Import { pattern, out, size, units } => import(&pattern, &out, size.as_deref(), units),
+        Command::Compare { scenes, out, quiet } => compare(&scenes, &out, quiet),
         Command::Bench { json, quick, drive } => if drive { bench::drive::run_drive(&json, quick) } else { bench::run_all(&json, quick) }.map_err(|e| e.to_string()),
         Command::Study { scene, out, sizes, tolerances, discrete_only, vtu } => {
             use plyshell::garment::PlyModel;
@@ -296,6 +312,31 @@ fn body(measurements: Option<&Path>, pose: Option<&Path>, motion: Option<&Path>,
         mannequin::obj::write_obj(&path, &body, &body.placements(p), name)?;
         say!("wrote {}", path.display());
     }
+    Ok(())
+}
+
+/// `plyshell compare`: loads every variant first (a bad file stops before any solve), then
+/// solves each and writes the report (`plyshell::compare`).
+fn compare(scenes: &[PathBuf], out: &Path, quiet: bool) -> Result<(), String> {
+    let variants = plyshell::compare::load_variants(scenes)?;
+    let started = std::time::Instant::now();
+    let mut last: Option<(String, usize, f64)> = None;
+    let mut progress = |variant: &str, p: &Progress| {
+        if quiet {
+            return;
+        }
+        let now = started.elapsed().as_secs_f64();
+        if last.as_ref().is_none_or(|(v, step, at)| v != variant || *step != p.step || now - at >= 10.0) {
+            last = Some((variant.to_string(), p.step, now));
+            warn!("[{now:8.1} s] {variant}: step {} iter {} residual {:.2e}", p.step + 1, p.iteration, p.residual);
+        }
+    };
+    let report = plyshell::compare::run(&variants, out, &mut progress)?;
+    for v in &variants {
+        say!("variant {}: {} → {}", v.name, v.file.display(), out.join(&v.name).display());
+    }
+    say!("report in {}: {}", out.display(), report.files.iter().filter(|f| !f.starts_with("plots/")).cloned().collect::<Vec<_>>().join(", "));
+    say!("{} seam plots in {}", report.files.iter().filter(|f| f.starts_with("plots/")).count(), out.join("plots").display());
     Ok(())
 }
 

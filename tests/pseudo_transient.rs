@@ -69,7 +69,7 @@ fn hanging_cloth_comes_to_rest_in_static_equilibrium() {
         assert!((ra - mirrored).abs() <= 0.01 * weight, "corner reactions not mirror images: {ra} vs {rb} (component {k})");
     }
 
-    let plan = vec![StepPlan { name: "static check".into(), increments: 1, linear: false, automatic_increments: false, target_scales: scales.clone(), kind: StepKind::Static }];
+    let plan = vec![StepPlan { name: "static check".into(), increments: 1, linear: false, automatic_increments: false, target_scales: scales.clone(), kind: StepKind::Static, clock: None }];
     let before = state.clone();
     let mut its = 0;
     solver.run(&plan, &mut state, &mut |r, _, _| its += r.iterations, &mut |_| {}).unwrap_or_else(|e| panic!("static check failed: {e}"));
@@ -241,6 +241,7 @@ fn nodal_force_hook_adds_springs_to_residual_and_tangent() {
         automatic_increments: false,
         target_scales: vec![4.0e4],
         kind: StepKind::Dynamic(plyshell::solver::DynamicSettings { dt: 0.01, dt_max: 1e3, rest_residual_tol: 1e-9, ..Default::default() }),
+        clock: None,
     }];
     let mut solver = Solver::new(&built.model, sc.solver.clone()).expect("solver");
     solver.add_nodal_forces(Box::new(TipSprings { nodes: tip.clone(), k: k_b / tip.len() as f64 }));

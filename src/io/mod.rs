@@ -7,6 +7,8 @@ pub mod inp;
 pub mod modes;
 pub mod obj;
 pub mod plot;
+pub mod png;
 pub mod pvd;
+pub mod raster;
 pub mod surface;
 pub mod vtu;

@@ -51,6 +51,8 @@ pub struct BuiltScene {
     pub garment: Option<crate::garment::export::GarmentLayout>,
     /// Contact between adjacent plies of the garment's multi-ply panels.
     pub interply: Option<crate::contact::interply::InterplySetup>,
+    /// The movement protocol's poses and their steps (appended to `steps`), if any.
+    pub protocol: Option<super::protocol::Protocol>,
 }
 
 /// Most increments of one step (each reported and possibly written as a VTU).
@@ -592,7 +594,7 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
         if matches!(kind, crate::solver::StepKind::Buckling { .. } | crate::solver::StepKind::ArcLength { .. }) && current == previous {
             return Err(loc.at(Some(&s.name), Some("scale"), format!("{field}.scale"), "the step changes no load: give the reference load's target scale in its scale table"));
         }
-        steps.push(StepPlan { name: s.name.clone(), increments: s.increments, linear: s.linear, automatic_increments: s.automatic_increments, target_scales: current.clone(), kind });
+        steps.push(StepPlan { name: s.name.clone(), increments: s.increments, linear: s.linear, automatic_increments: s.automatic_increments, target_scales: current.clone(), kind, clock: None });
     }
 
     // Monitors.
@@ -622,6 +624,10 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
 
     let contact = match &scene.contact {
         Some(c) => Some(crate::contact::build_contact(c, &loc, base_dir, &parts)?),
+        None => None,
+    };
+    let protocol = match &scene.protocol {
+        Some(p) => Some(super::protocol::expand(p, scene.contact.as_ref(), &loc, base_dir, &mut steps, &current)?),
         None => None,
     };
     if let Some(d) = &scene.drape {
@@ -703,7 +709,7 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
         }
     }
     let model = Model { x0, frames0, elements, sections, parts, dofs, loads };
-    Ok(BuiltScene { model, steps, monitors, node_sets, quality, imperfection, seams, warnings, garment: layout, contact, interply })
+    Ok(BuiltScene { model, steps, monitors, node_sets, quality, imperfection, seams, warnings, garment: layout, contact, interply, protocol })
 }
 
 fn check_young_poisson(young: f64, poisson: f64, bad: &dyn Fn(&str, &str) -> SceneError) -> Result<(), SceneError> {

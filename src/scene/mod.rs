@@ -5,6 +5,7 @@ mod error;
 mod fabric_spec;
 mod names;
 mod path;
+pub mod protocol;
 mod spec;
 
 pub use build::{build, BuiltScene, Monitor};

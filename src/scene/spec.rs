@@ -56,6 +56,28 @@ pub struct Scene {
     /// A garment (panels, plies, seams, stitch lines) whose plies become further parts.
     #[serde(default)]
     pub garment: Option<crate::garment::GarmentSpec>,
+    /// A movement protocol: after `steps` (at the motion's first pose), one step to rest at
+    /// each further pose of a mannequin body's motion file (`scene::protocol`).
+    #[serde(default)]
+    pub protocol: Option<ProtocolSpec>,
+}
+
+/// A movement protocol (issue 17): the garment is taken through the poses of a mannequin
+/// contact body's motion file, solving to rest at each. The scene's own `steps` run first,
+/// with the body held in the motion's first pose (sewing, drape); then one `Dynamic` step
+/// per further frame, named after its pose file, moves the body from the previous pose to
+/// that one over the frames' time interval (the garment carried by contact) and goes on
+/// until the garment is at rest with the body held in the pose. `summary.json` gets a
+/// `poses` section with the seam, ply, strain, clearance and pressure measures at the rest
+/// state of the first pose and of every pose step.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ProtocolSpec {
+    /// Name of the contact body: a `Mannequin` with a `motion` file.
+    pub body: String,
+    /// Controls of each pose step (a `Dynamic` step to rest; `duration` must stay 0).
+    #[serde(default)]
+    pub settle: crate::solver::DynamicSettings,
 }
 
 /// Geometric imperfections (added to the reference mid-surface and directors).

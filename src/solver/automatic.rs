@@ -69,7 +69,7 @@ impl Solver<'_> {
             }
             let mut report_progress = |it: usize, res: f64| progress(&Progress { step: si, fraction: next, iteration: it, residual: res });
             self.begin_nodal_increment((next - tau) * step.increments.max(1) as f64);
-            self.begin_nodal_motion(clock0 + next, state);
+            self.begin_nodal_motion(step.static_clock(clock0, next), state);
             match self.attempt(state, &trial_scales, false, true, &mut report_progress) {
                 Attempt::Converged { iterations: its, residuals, indefinite: ind, energy } => {
                     iterations += its;

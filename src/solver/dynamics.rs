@@ -902,8 +902,12 @@ impl<'m> Solver<'m> {
             }
         }
         let clock0 = self.clock;
-        // A step to rest does not end before the bodies' prescribed motion does.
-        let motion_end = self.motion_end() - clock0;
+        // A step to rest does not end before the bodies' prescribed motion does (within the
+        // step's clock window, if it has one: it then ends no earlier than the window).
+        let motion_end = match step.clock {
+            Some([s, e]) => e - s,
+            None => self.motion_end() - clock0,
+        };
         let mut t = 0.0;
         let mut dt = ds.dt;
         let mut rejected = 0usize;
@@ -921,7 +925,7 @@ impl<'m> Solver<'m> {
             // Predictor: constant velocity would overshoot at rest; start from the last state.
             *state = prev.state.clone();
             self.begin_nodal_increment(dt / ds.dt);
-            self.begin_nodal_motion(clock0 + t + dt, state);
+            self.begin_nodal_motion(step.dynamic_clock(clock0, t + dt), state);
             let outcome = self.time_step(state, &prev, &mass, dt, ds, &scales, &mut report_progress);
             match outcome {
                 TimeStep::Converged { iterations: its, residuals, static_residual, energy, static_r } => {

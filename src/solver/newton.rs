@@ -34,6 +34,34 @@ pub struct StepPlan {
     pub target_scales: Vec<f64>,
     /// How the step is solved (static Newton by default).
     pub kind: StepKind,
+    /// Analysis-clock window [start, end] of the step (`contact::motion`), or None for the
+    /// default clock (one unit per static step, simulated seconds in a `Dynamic` step, from
+    /// wherever the previous step left it). With a window the clock is set to `start` when
+    /// the step begins; a static step runs it linearly to `end` over its load fraction, a
+    /// `Dynamic` step runs it with its simulated time and holds it at `end` once there, and
+    /// a `Dynamic` step to rest does not end before the clock has reached `end`. A movement
+    /// protocol (`scene::protocol`) gives each pose step the window of its motion segment,
+    /// so the step moves the body to its pose and then settles with the body held there.
+    pub clock: Option<[f64; 2]>,
+}
+
+impl StepPlan {
+    /// Analysis time after a fraction `tau` ∈ [0, 1] of a static (or path-following) step
+    /// that began at `clock0`.
+    pub fn static_clock(&self, clock0: f64, tau: f64) -> f64 {
+        match self.clock {
+            Some([s, e]) => s + tau * (e - s),
+            None => clock0 + tau,
+        }
+    }
+
+    /// Analysis time after simulated time `t` of a `Dynamic` step that began at `clock0`.
+    pub fn dynamic_clock(&self, clock0: f64, t: f64) -> f64 {
+        match self.clock {
+            Some([s, e]) => (s + t).min(e),
+            None => clock0 + t,
+        }
+    }
 }
 
 /// Wall time split (s).
@@ -366,6 +394,13 @@ impl<'m> Solver<'m> {
     /// Reactions and internal forces of the last assembly (all DOFs).
     pub fn internal_force(&self) -> &[f64] {
         &self.f_int
+    }
+
+    /// All-DOF external forces of the last assembly: the loads plus every nodal-force term
+    /// (contact, compliant seams, surface contact), so that f_int − f_ext at a tied slave
+    /// node is the force its ties carry.
+    pub fn external_force(&self) -> &[f64] {
+        &self.f_ext
     }
 
     /// Free-DOF residual r = f_int − f_ext; returns (‖r‖ / reference, reference).
@@ -778,6 +813,9 @@ impl<'m> Solver<'m> {
             tracker.new_step();
             // The analysis clock at the start of the step; a step that does not move it
             // itself (arc length, buckling) ends one unit later (`contact::motion`).
+            if let Some([start, _]) = step.clock {
+                self.clock = start;
+            }
             let clock0 = self.clock;
             self.clock_trial = self.clock;
             match &step.kind {
@@ -796,14 +834,14 @@ impl<'m> Solver<'m> {
                         progress(&Progress { fraction: frac0 + p.fraction * (frac1 - frac0), ..p.clone() })
                     })?;
                     done_before += n_inc;
-                    (self.clock, self.clock_trial) = (clock0 + 1.0, clock0 + 1.0);
+                    (self.clock, self.clock_trial) = (step.static_clock(clock0, 1.0), step.static_clock(clock0, 1.0));
                     continue;
                 }
                 StepKind::Buckling { modes, shift } => {
                     let report = self.run_buckling(si, step, &start, state, *modes, *shift)?;
                     on_increment(&report, state, self);
                     done_before += n_inc;
-                    (self.clock, self.clock_trial) = (clock0 + 1.0, clock0 + 1.0);
+                    (self.clock, self.clock_trial) = (step.static_clock(clock0, 1.0), step.static_clock(clock0, 1.0));
                     continue;
                 }
             }
@@ -830,7 +868,7 @@ impl<'m> Solver<'m> {
                     let frac = (done_before as f64 + next * n_inc as f64) / total as f64;
                     let mut report_progress = |it: usize, res: f64| progress(&Progress { step: si, fraction: frac, iteration: it, residual: res });
                     self.begin_nodal_increment((next - tau) * n_inc as f64);
-                    self.begin_nodal_motion(clock0 + next, state);
+                    self.begin_nodal_motion(step.static_clock(clock0, next), state);
                     let outcome = match step.kind {
                         StepKind::StaticDamped => self.attempt_damped(state, &trial_scales, &mut report_progress),
                         _ => self.attempt(state, &trial_scales, step.linear, false, &mut report_progress),
