@@ -387,7 +387,7 @@ mod tests {
     /// λ ≈ 18.3 mm): with B = E t³/12(1−ν²) and T = E t γ, λ = 2π (B L²/(T π²))^{1/4}.
     #[test]
     fn wrinkle_wavelength_matches_the_reference_example() {
-        let (e, t, nu, gamma, l) = (1.0e6, 1.0e-4, 0.5, 0.10, 0.254);
+        let (e, t, nu, gamma, l): (f64, f64, f64, f64, f64) = (1.0e6, 1.0e-4, 0.5, 0.10, 0.254);
         let b = e * t.powi(3) / (12.0 * (1.0 - nu * nu));
         let lam = wrinkle_wavelength(b, e * t * gamma, l);
         assert!((lam - 0.0183).abs() < 0.0001, "λ = {lam}");
