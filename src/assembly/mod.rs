@@ -15,7 +15,11 @@ use rayon::prelude::*;
 
 use std::sync::Mutex;
 
-use crate::element::{orientation, ElemMat, ElemVec, ElementFailure, ElementGeometry, SectionRule, ELEMENT_DOFS, NODE_DOFS};
+use nalgebra::Vector3;
+
+use crate::element::mixed::{extrapolate, point_count, unknown_change, Mixed, PointRecord};
+use crate::element::{orientation, DirectorFrame, ElemMat, ElemVec, ElementFailure, ElementGeometry, SectionRule, ELEMENT_DOFS, NODE_DOFS};
+use crate::material::Voigt5;
 use crate::model::{Model, State, FIXED, UNTIED};
 
 const NO_SLOT: u32 = u32::MAX;
@@ -100,7 +104,45 @@ pub struct Assembler {
     /// (eigenvalue filtering, [`project_psd`]): a descent direction for the energy where the
     /// assembled tangent is indefinite.
     pub project: bool,
+    /// Build the geometric stiffness from mixed-integration-point stresses
+    /// ([`crate::element::mixed`]; Magisano, Leonetti & Garcea 2017): each tangent
+    /// evaluation records its point stresses, and the next one extrapolates them.
+    pub mixed: bool,
+    /// The records of the mixed-integration-point stresses.
+    records: Mutex<MixedStore>,
 }
+
+/// Largest number of integration points per element for which mixed stresses are kept.
+const MAX_MIXED_POINTS: usize = 64;
+
+/// Configuration of an element's nodes (displacements and director frames).
+type ElementConfiguration = ([Vector3<f64>; 4], [DirectorFrame; 4]);
+
+/// Mixed-integration-point stress records of every element.
+#[derive(Debug, Default)]
+struct MixedStore {
+    /// First record of each element in `records` (n_el + 1 entries).
+    offsets: Vec<usize>,
+    /// Per integration point, the last tangent evaluation's [`PointRecord`].
+    records: Vec<PointRecord>,
+    /// The configuration of each element at its record (None: no valid record).
+    at: Vec<Option<ElementConfiguration>>,
+}
+
+/// Raw access to the [`MixedStore`] of one assembly, shared by the threads of a colour
+/// (each element touches only its own records).
+#[derive(Clone, Copy)]
+struct MixedAccess<'a> {
+    offsets: &'a [usize],
+    records: *mut PointRecord,
+    at: *mut Option<ElementConfiguration>,
+}
+
+// SAFETY: the pointers come from a store locked for the whole assembly, and every element
+// touches only its own records and configuration (disjoint ranges).
+unsafe impl Send for MixedAccess<'_> {}
+// SAFETY: as for Send.
+unsafe impl Sync for MixedAccess<'_> {}
 
 /// Greedy colouring of the elements in index order: each element takes the lowest colour
 /// that none of the elements already coloured at its nodes has. Elements marked in
@@ -318,7 +360,7 @@ impl Assembler {
             })
             .collect();
         let rules: Vec<Result<SectionRule, ElementFailure>> = model.sections.iter().map(SectionRule::new).collect();
-        let geometry = (0..model.elements.len())
+        let geometry: Vec<Result<ElementGeometry, ElementFailure>> = (0..model.elements.len())
             .into_par_iter()
             .map(|e| match &rules[model.elements[e].section] {
                 Ok(rule) => model.element(e).geometry(rule),
@@ -334,7 +376,21 @@ impl Assembler {
             .collect();
         let constrained: Vec<bool> = model.elements.iter().map(|el| is_tied(el)).collect();
         let (colours, serial) = colour_elements(model, &constrained);
-        Self { pattern, slots, rules, geometry, orientation, tied, linked, colours, serial, project: false }
+        let mut offsets = vec![0];
+        for g in &geometry {
+            let n = g.as_ref().map_or(0, point_count);
+            offsets.push(offsets.last().copied().unwrap_or(0) + if n <= MAX_MIXED_POINTS { n } else { 0 });
+        }
+        let records = Mutex::new(MixedStore { offsets, ..Default::default() });
+        Self { pattern, slots, rules, geometry, orientation, tied, linked, colours, serial, project: false, mixed: false, records }
+    }
+
+    /// Drops every mixed-stress record, so the next tangent of each element is the standard
+    /// one (after a state is restored, e.g. on a cut-back: the records of the abandoned
+    /// iterates would extrapolate from the wrong configuration).
+    pub fn forget_mixed(&self) {
+        let mut store = self.records.lock().unwrap_or_else(|p| p.into_inner());
+        store.at.iter_mut().for_each(|a| *a = None);
     }
 
     /// Number of stored entries of the upper triangle.
@@ -351,6 +407,12 @@ impl Assembler {
     /// The tangent is left in `k` as a full 20×20 matrix, so it can be transformed before
     /// [`Assembler::scatter`].
     pub fn element_response(&self, model: &Model, state: &State, e: usize, k: Option<&mut ElemMat>) -> Result<(ElemVec, f64), AssemblyFailure> {
+        self.element_response_mixed(model, state, e, k, None)
+    }
+
+    /// [`Assembler::element_response`], recording and using the element's mixed-stress
+    /// records through `mixed` when given (and a tangent is asked for).
+    fn element_response_mixed(&self, model: &Model, state: &State, e: usize, k: Option<&mut ElemMat>, mixed: Option<MixedAccess<'_>>) -> Result<(ElemVec, f64), AssemblyFailure> {
         let def = &model.elements[e];
         let x = def.nodes.map(|n| state.u[n]);
         let frames = def.nodes.map(|n| state.frames[n]);
@@ -358,7 +420,25 @@ impl Assembler {
         let rule = self.rules[def.section].as_ref().map_err(|f| fail(f.clone()))?;
         let geom = self.geometry[e].as_ref().map_err(|f| fail(f.clone()))?;
         let mut k = k;
-        let (mut force, energy) = model.element(e).response_into(rule, geom, &x, &frames, k.as_deref_mut()).map_err(fail)?;
+        let element = model.element(e);
+        let (mut force, energy) = match mixed {
+            Some(m) if k.is_some() && m.offsets[e + 1] > m.offsets[e] => {
+                let (lo, hi) = (m.offsets[e], m.offsets[e + 1]);
+                // SAFETY: element e's records and configuration are touched by this call only
+                // (see `MixedAccess`), and lie inside the store's arrays.
+                let (records, at) = unsafe { (std::slice::from_raw_parts_mut(m.records.add(lo), hi - lo), &mut *m.at.add(e)) };
+                let mut geo = [Voigt5::zeros(); MAX_MIXED_POINTS];
+                let geo = at.as_ref().map(|(u0, f0)| {
+                    extrapolate(records, &unknown_change(u0, f0, &x, &frames), &mut geo[..hi - lo]);
+                    &geo[..hi - lo]
+                });
+                let out = element.response_mixed(rule, geom, &x, &frames, k.as_deref_mut(), Some(Mixed { geo, record: records }));
+                *at = out.is_ok().then_some((x, frames));
+                out
+            }
+            _ => element.response_into(rule, geom, &x, &frames, k.as_deref_mut()),
+        }
+        .map_err(fail)?;
         // The director orientation barrier, zero in every regular state.
         let (signs, kappa) = &self.orientation[e];
         let current = std::array::from_fn(|a| model.x0[def.nodes[a]] + x[a]);
@@ -438,6 +518,18 @@ impl Assembler {
         let n_el = model.elements.len();
         assert!(f_int.len() >= NODE_DOFS * model.n_nodes() && values.as_deref().is_none_or(|v| v.len() >= self.nnz()), "assembly output too short");
         let mut energies = vec![0.0; n_el];
+        let mut store = self.records.lock().unwrap_or_else(|p| p.into_inner());
+        let mixed = if self.mixed && with_tangent {
+            let store = &mut *store;
+            let n = store.offsets.last().copied().unwrap_or(0);
+            if store.records.len() != n || store.at.len() != n_el {
+                store.records = vec![PointRecord::default(); n];
+                store.at = vec![None; n_el];
+            }
+            Some(MixedAccess { offsets: &store.offsets, records: store.records.as_mut_ptr(), at: store.at.as_mut_ptr() })
+        } else {
+            None
+        };
         let e_ptr = Shared(energies.as_mut_ptr());
         let f_ptr = Shared(f_int.as_mut_ptr());
         let v_ptr = values.as_deref_mut().map(|v| Shared(v.as_mut_ptr()));
@@ -451,7 +543,7 @@ impl Assembler {
         };
         for colour in &self.colours {
             colour.par_iter().with_min_len(MIN_TASK).for_each_init(ElemMat::zeros, |k, &e| {
-                match self.element_response(model, state, e, with_tangent.then_some(&mut *k)) {
+                match self.element_response_mixed(model, state, e, with_tangent.then_some(&mut *k), mixed) {
                     Ok((force, energy)) => {
                         if with_tangent && self.project {
                             *k = project_psd(k);
@@ -470,7 +562,7 @@ impl Assembler {
         }
         let mut k = ElemMat::zeros();
         for &e in &self.serial {
-            match self.element_response(model, state, e, with_tangent.then_some(&mut k)) {
+            match self.element_response_mixed(model, state, e, with_tangent.then_some(&mut k), mixed) {
                 Ok((force, energy)) => {
                     if with_tangent && self.project {
                         k = project_psd(&k);
@@ -481,6 +573,7 @@ impl Assembler {
                 Err(f) => record(f),
             }
         }
+        drop(store);
         if let Some(f) = failure.into_inner().unwrap_or_else(|p| p.into_inner()) {
             return Err(f);
         }

@@ -6,6 +6,7 @@
 pub mod director;
 mod kinematics;
 mod membrane;
+pub mod mixed;
 pub mod orientation;
 pub mod quadrature;
 mod rule;

@@ -59,6 +59,7 @@ use serde::{Deserialize, Serialize};
 use super::director::DirectorFrame;
 use super::kinematics::{Kinematics, Lin, NV};
 use super::membrane::MembraneState;
+use super::mixed::{point_count, Mixed};
 use super::quadrature::{bilinear, gauss_legendre};
 use super::rule::{Comp, RulePoint, MAX_FORMS, MAX_PAIRS};
 pub use super::rule::{ElementGeometry, SectionRule};
@@ -297,12 +298,30 @@ impl<'a> ShellElement<'a> {
         frames: &[DirectorFrame; 4],
         k: Option<&mut ElemMat>,
     ) -> Result<(ElemVec, f64), ElementFailure> {
+        self.response_mixed(rule, geom, u, frames, k, None)
+    }
+
+    /// [`ShellElement::response_into`] with mixed-integration-point stresses
+    /// ([`super::mixed`]): with a tangent and `mixed` given, the per-point stress and D·B rows
+    /// are recorded into `mixed.record`, and the geometric stiffness is built from the
+    /// extrapolated stresses `mixed.geo` when present (the force and energy always come from
+    /// the current strains). Ignored by MITC4+ elements (their assumed membrane stresses are
+    /// tied across points) and without a tangent.
+    pub fn response_mixed(
+        &self,
+        rule: &SectionRule,
+        geom: &ElementGeometry,
+        u: &[Vector3<f64>; 4],
+        frames: &[DirectorFrame; 4],
+        k: Option<&mut ElemMat>,
+        mixed: Option<Mixed<'_>>,
+    ) -> Result<(ElemVec, f64), ElementFailure> {
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx2") {
             // SAFETY: the CPU supports AVX2, the only requirement of `response_avx2`.
-            return unsafe { self.response_avx2(rule, geom, u, frames, k) };
+            return unsafe { self.response_avx2(rule, geom, u, frames, k, mixed) };
         }
-        self.response_kernel(rule, geom, u, frames, k)
+        self.response_kernel(rule, geom, u, frames, k, mixed)
     }
 
     /// `response_kernel` compiled for AVX2.
@@ -315,8 +334,9 @@ impl<'a> ShellElement<'a> {
         u: &[Vector3<f64>; 4],
         frames: &[DirectorFrame; 4],
         k: Option<&mut ElemMat>,
+        mixed: Option<Mixed<'_>>,
     ) -> Result<(ElemVec, f64), ElementFailure> {
-        self.response_kernel(rule, geom, u, frames, k)
+        self.response_kernel(rule, geom, u, frames, k, mixed)
     }
 
     /// The body of `response_into`.
@@ -328,6 +348,7 @@ impl<'a> ShellElement<'a> {
         u: &[Vector3<f64>; 4],
         frames: &[DirectorFrame; 4],
         mut k: Option<&mut ElemMat>,
+        mixed: Option<Mixed<'_>>,
     ) -> Result<(ElemVec, f64), ElementFailure> {
         if !rule.fits() {
             return Err(ElementFailure::ThicknessRule(rule.levels.len()));
@@ -351,6 +372,16 @@ impl<'a> ShellElement<'a> {
         // MITC4+: the membrane pairs, evaluated once for all levels.
         let tying = rule.membrane.as_ref();
         let mut mstate = tying.map(|m| MembraneState::new(m, &geom.tying, &rule.forms, &geom.forms, df, &kin, with_tangent));
+        // Mixed-integration-point stresses (`mixed`): the record, and the extrapolated
+        // stresses that replace the current ones in the geometric stiffness.
+        let (mut record, geo) = match mixed {
+            Some(m) if with_tangent && tying.is_none() && m.record.len() == point_count(geom) => {
+                let geo = m.geo.filter(|g| g.len() == point_count(geom));
+                (Some(m.record), geo)
+            }
+            _ => (None, None),
+        };
+        let mut fv_geo = [Vector3::zeros(); NV];
         let mut upper: Upper = [[0.0; ELEMENT_DOFS]; ELEMENT_DOFS];
         let mut energy = 0.0;
         // Generalised forces on the kinematic vectors and the second-derivative matrix
@@ -410,6 +441,9 @@ impl<'a> ShellElement<'a> {
             }
             let mut sigma = [0.0; MAX_PAIRS];
             let mut sn_c = Voigt5::zeros();
+            let mut sigma_geo = [0.0; MAX_PAIRS];
+            let mut sn_c_geo = Voigt5::zeros();
+            let base = first_point - n_pts;
             // Σ BᵀDB over the level's points: the 2E12 row is the level's, common to its
             // points, so it enters once with Σ (DB)₂ (the last stacked row).
             let mut db_shear: Row = [0.0; ELEMENT_DOFS];
@@ -435,6 +469,14 @@ impl<'a> ShellElement<'a> {
                 add_pair_stress(&rp.comps, &sn, &mut sigma);
                 if let (Some(m), Some(ms)) = (tying, mstate.as_mut()) {
                     ms.add_stress(&m.points[i], &geom.tying[i], sn.as_slice());
+                }
+                if let Some(g) = geo {
+                    let sw_geo = g[base + i];
+                    sn_c_geo += pg.mc.transpose() * sw_geo[2];
+                    add_pair_stress(&rp.comps, &(pg.m.transpose() * sw_geo), &mut sigma_geo);
+                }
+                if let Some(rec) = record.as_deref_mut() {
+                    rec[base + i].sw = sw;
                 }
                 if let (Some(d), true) = (tangent, n_rows + 5 <= STACK) {
                     // B = M Bn (row 2E12 from the centre when sampled there), DB with D
@@ -464,6 +506,9 @@ impl<'a> ShellElement<'a> {
                                 dbr.iter_mut().zip(bq).for_each(|(x, y)| *x += dq * y);
                             }
                         }
+                        if let Some(rec) = record.as_deref_mut() {
+                            rec[base + i].db[r] = dbr;
+                        }
                         if r == 2 && rule.centre_shear {
                             db_shear.iter_mut().zip(&dbr).for_each(|(x, y)| *x += y);
                         } else {
@@ -477,6 +522,9 @@ impl<'a> ShellElement<'a> {
             }
             if rule.centre_shear {
                 add_pair_stress(&level.centre.comps, &sn_c, &mut sigma);
+                if geo.is_some() {
+                    add_pair_stress(&level.centre.comps, &sn_c_geo, &mut sigma_geo);
+                }
                 if let (Some(m), Some(ms)) = (tying, mstate.as_mut()) {
                     ms.add_stress(&m.points[n_pts], &geom.tying[n_pts], sn_c.as_slice());
                 }
@@ -489,7 +537,12 @@ impl<'a> ShellElement<'a> {
             if with_tangent {
                 add_upper_btc(&mut upper, &b_stack[..n_rows], &db_stack[..n_rows]);
             }
-            add_pair_forces(&sigma, pairs, &rule.forms, current, &mut fv, with_tangent.then_some(&mut x));
+            if geo.is_some() {
+                add_pair_forces(&sigma, pairs, &rule.forms, current, &mut fv, None);
+                add_pair_forces(&sigma_geo, pairs, &rule.forms, current, &mut fv_geo, Some(&mut x));
+            } else {
+                add_pair_forces(&sigma, pairs, &rule.forms, current, &mut fv, with_tangent.then_some(&mut x));
+            }
         }
         if let (Some(m), Some(ms)) = (tying, &mstate) {
             let current = |f: usize| geom.forms[f] + df[f];
@@ -507,7 +560,12 @@ impl<'a> ShellElement<'a> {
         if let Some(k) = k.as_deref_mut() {
             mirror_into(&upper, k);
             let d = frames.map(|f| f.d);
-            add_geometric_tangent(k, &symmetric_part(&x), &fv, &feff, &kin, &d);
+            if geo.is_some() {
+                let feff_geo = kin.director_chain(&fv_geo);
+                add_geometric_tangent(k, &symmetric_part(&x), &fv_geo, &feff_geo, &kin, &d);
+            } else {
+                add_geometric_tangent(k, &symmetric_part(&x), &fv, &feff, &kin, &d);
+            }
         }
         Ok((force, energy))
     }
@@ -695,6 +753,54 @@ mod tests {
             for thickness_points in 1..=5 {
                 let sec = Section { thickness_points, ..section(shear, false) };
                 assert!(SectionRule::new(&sec).unwrap().fits(), "{shear:?}, {thickness_points} points");
+            }
+        }
+    }
+
+    /// Mixed-integration-point tangent (`element::mixed`): with stresses extrapolated from a
+    /// record at the same configuration it equals the standard tangent; from a record a step
+    /// h away it differs by O(h²) (the extrapolated stress's error), and the force never
+    /// changes. Every material, MITC4 and SRI (MITC4+ ignores mixed stresses).
+    #[test]
+    fn mixed_tangent_is_standard_at_the_record_and_second_order_away() {
+        use super::super::mixed::{extrapolate, point_count, unknown_change, Mixed, PointRecord};
+        let (x0, d0) = geometry();
+        for shear in [ShearTreatment::Mitc4, ShearTreatment::Sri] {
+            for material in ["SVK", "neo-Hookean", "fabric", "laminate"] {
+                let sec = section_of(shear, material);
+                let el = ShellElement { x0, d0, grain: None, section: &sec };
+                let rule = SectionRule::new(&sec).unwrap();
+                let geom = el.geometry(&rule).unwrap();
+                let n = point_count(&geom);
+                let mut u = ElemVec::zeros();
+                let mut dir = ElemVec::zeros();
+                for a in 0..4 {
+                    u[5 * a] = 0.05 * x0[a].y;
+                    u[5 * a + 2] = 0.2 * x0[a].x * x0[a].y;
+                    u[5 * a + 3] = 0.3 - 0.1 * a as f64;
+                    u[5 * a + 4] = -0.2 + 0.1 * a as f64;
+                    for i in 0..5 {
+                        dir[5 * a + i] = 0.3 * (((7 * a + 3 * i) % 5) as f64 - 2.0);
+                    }
+                }
+                let (xa, fa) = apply(&[Vector3::zeros(); 4], &frames(&d0), &u);
+                let mut records = vec![PointRecord::default(); n];
+                let mut k_rec = ElemMat::zeros();
+                el.response_mixed(&rule, &geom, &xa, &fa, Some(&mut k_rec), Some(Mixed { geo: None, record: &mut records })).unwrap();
+                let mismatch = |h: f64| {
+                    let (xb, fb) = apply(&xa, &fa, &(dir * h));
+                    let mut geo = vec![Voigt5::zeros(); n];
+                    extrapolate(&records, &unknown_change(&xa, &fa, &xb, &fb), &mut geo);
+                    let mut scratch = vec![PointRecord::default(); n];
+                    let (mut k_std, mut k_mix) = (ElemMat::zeros(), ElemMat::zeros());
+                    let (f_std, _) = el.response_into(&rule, &geom, &xb, &fb, Some(&mut k_std)).unwrap();
+                    let (f_mix, _) = el.response_mixed(&rule, &geom, &xb, &fb, Some(&mut k_mix), Some(Mixed { geo: Some(&geo), record: &mut scratch })).unwrap();
+                    assert_eq!(f_std, f_mix, "{material} {shear:?}: the force must not change");
+                    (k_std - k_mix).abs().max() / k_std.abs().max()
+                };
+                let (at, h1, h2) = (mismatch(0.0), mismatch(1e-2), mismatch(5e-3));
+                assert!(at < 1e-13, "{material} {shear:?}: {at:e} at the record");
+                assert!(h1 > 0.0 && (h1 / h2 - 4.0).abs() < 0.4, "{material} {shear:?}: mismatch {h1:e} at h, {h2:e} at h/2 (not second order)");
             }
         }
     }

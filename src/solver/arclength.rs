@@ -232,6 +232,7 @@ impl<'m> Solver<'m> {
                             }
                             (PathAttempt::Failed { iteration, residuals, worst_element, cause }, _, _) => {
                                 *state = saved.clone();
+                                self.assembler.forget_mixed();
                                 iterations += iteration;
                                 cutbacks += 1;
                                 dl *= 0.5;

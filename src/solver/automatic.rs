@@ -96,6 +96,7 @@ impl Solver<'_> {
                 }
                 Attempt::Failed { iteration, residuals, worst_element, cause } => {
                     *state = saved;
+                    self.assembler.forget_mixed();
                     iterations += iteration;
                     cutbacks += 1;
                     dtau *= 0.25;

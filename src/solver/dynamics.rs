@@ -1054,6 +1054,7 @@ impl<'m> Solver<'m> {
                     }
                     indefinite |= matches!(outcome, TimeStep::Indefinite { .. });
                     *state = prev.state.clone();
+                    self.assembler.forget_mixed();
                     rejected += 1;
                     dt *= 0.25;
                 }

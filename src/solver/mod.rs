@@ -41,11 +41,17 @@ pub struct SolverSettings {
     /// Chord (modified) Newton in static load-controlled increments: keep a factorization
     /// while the residual contracts fast (`chord.rs`); None (the default) is full Newton.
     pub chord: Option<ChordSettings>,
+    /// Geometric stiffness from mixed-integration-point stresses (extrapolated along the
+    /// linearised strain instead of recomputed from the new strains; Magisano, Leonetti &
+    /// Garcea 2017, `element::mixed`): fewer Newton iterations on thin shells turning
+    /// through large rotations. The residual, and so the converged state, is unchanged.
+    /// Used by Static, ArcLength and DisplacementControl steps (not by time steps).
+    pub mixed_stress: bool,
 }
 
 impl Default for SolverSettings {
     fn default() -> Self {
-        Self { max_iterations: 30, residual_tol: 1e-7, energy_tol: 1e-14, line_search: true, max_cutbacks: 10, threads: 0, chord: None }
+        Self { max_iterations: 30, residual_tol: 1e-7, energy_tol: 1e-14, line_search: true, max_cutbacks: 10, threads: 0, chord: None, mixed_stress: true }
     }
 }
 
