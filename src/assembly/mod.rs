@@ -6,8 +6,9 @@
 //! elements of a colour are evaluated and scattered in parallel (rayon) without locks, since
 //! they write disjoint slots and disjoint force entries, colour after colour. Elements with
 //! tied DOFs (whose entries go through the constraint weights to other nodes' equations)
-//! are assembled serially afterwards. Every slot receives its contributions in the same
-//! order whatever the number of threads, so the assembly is deterministic.
+//! come afterwards: evaluated in parallel, a chunk at a time, and scattered serially in
+//! index order. Every slot receives its contributions in the same order whatever the
+//! number of threads, so the assembly is deterministic.
 
 use std::time::Instant;
 
@@ -24,6 +25,11 @@ const NO_SLOT: u32 = u32::MAX;
 const MAX_COLOURS: usize = 64;
 /// Fewest elements a rayon task takes.
 const MIN_TASK: usize = 32;
+/// Elements with tied DOFs evaluated in parallel before their serial scatter (bounds the
+/// buffer of element tangents: 128 × 3.2 KB).
+const SERIAL_CHUNK: usize = 128;
+/// Fewest elements with tied DOFs a rayon task takes.
+const MIN_SERIAL_TASK: usize = 4;
 
 /// Upper-triangular CSC pattern of the free-DOF tangent.
 #[derive(Clone, Debug)]
@@ -94,7 +100,8 @@ pub struct Assembler {
     /// Elements without tied DOFs grouped by colour: no two elements of a colour share a
     /// node, so their slots and force entries are disjoint.
     colours: Vec<Vec<usize>>,
-    /// Elements assembled serially after the colours (tied DOFs, or no colour left).
+    /// Elements scattered serially after the colours (tied DOFs, or no colour left), in
+    /// index order; their element responses are evaluated in parallel.
     serial: Vec<usize>,
     /// Replace each element's tangent by a positive semi-definite one before the scatter
     /// (eigenvalue filtering, [`project_psd`]): a descent direction for the energy where the
@@ -347,6 +354,11 @@ impl Assembler {
         self.colours.len()
     }
 
+    /// Number of elements scattered serially after the colours (elements with tied DOFs).
+    pub fn n_serial(&self) -> usize {
+        self.serial.len()
+    }
+
     /// Internal force, energy and (when `k` is given) tangent of element `e` in `state`.
     /// The tangent is left in `k` as a full 20×20 matrix, so it can be transformed before
     /// [`Assembler::scatter`].
@@ -468,17 +480,38 @@ impl Assembler {
                 }
             });
         }
-        let mut k = ElemMat::zeros();
-        for &e in &self.serial {
-            match self.element_response(model, state, e, with_tangent.then_some(&mut k)) {
-                Ok((force, energy)) => {
-                    if with_tangent && self.project {
-                        k = project_psd(&k);
-                    }
-                    energies[e] = energy;
-                    self.scatter(model, e, &force, with_tangent.then_some(&k), f_int, values.as_deref_mut());
+        // Elements with tied DOFs: evaluated in parallel a chunk at a time, then scattered
+        // serially in index order (their entries go through the constraint weights to other
+        // nodes' equations), so every slot still receives its contributions in index order.
+        if !self.serial.is_empty() {
+            let len = SERIAL_CHUNK.min(self.serial.len());
+            let mut mats = if with_tangent { vec![ElemMat::zeros(); len] } else { Vec::new() };
+            let mut out: Vec<Option<Result<(ElemVec, f64), AssemblyFailure>>> = vec![None; len];
+            for chunk in self.serial.chunks(SERIAL_CHUNK) {
+                let n = chunk.len();
+                if with_tangent {
+                    chunk.par_iter().zip(out[..n].par_iter_mut()).zip(mats[..n].par_iter_mut()).with_min_len(MIN_SERIAL_TASK).for_each(|((&e, o), k)| {
+                        let r = self.element_response(model, state, e, Some(k));
+                        if r.is_ok() && self.project {
+                            *k = project_psd(k);
+                        }
+                        *o = Some(r);
+                    });
+                } else {
+                    chunk.par_iter().zip(out[..n].par_iter_mut()).with_min_len(MIN_SERIAL_TASK).for_each(|(&e, o)| {
+                        *o = Some(self.element_response(model, state, e, None));
+                    });
                 }
-                Err(f) => record(f),
+                for (i, &e) in chunk.iter().enumerate() {
+                    match out[i].take() {
+                        Some(Ok((force, energy))) => {
+                            energies[e] = energy;
+                            self.scatter(model, e, &force, mats.get(i), f_int, values.as_deref_mut());
+                        }
+                        Some(Err(f)) => record(f),
+                        None => {}
+                    }
+                }
             }
         }
         if let Some(f) = failure.into_inner().unwrap_or_else(|p| p.into_inner()) {
