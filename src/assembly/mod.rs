@@ -107,6 +107,59 @@ pub struct Assembler {
     /// (eigenvalue filtering, [`project_psd`]): a descent direction for the energy where the
     /// assembled tangent is indefinite.
     pub project: bool,
+    /// Keep every element's response (force, energy, unprojected tangent) of a tangent
+    /// assembly, so that a tangent assembly of the same state — the projected re-assembly
+    /// of a time step whose tangent was indefinite — scatters them again instead of
+    /// evaluating every element anew (models of up to [`CACHE_ELEMENTS`] elements; the
+    /// result is the same bit for bit).
+    pub keep_responses: bool,
+    /// The responses kept by `keep_responses` and the state they belong to.
+    cache: Mutex<ResponseCache>,
+}
+
+/// Largest model whose element responses [`Assembler::keep_responses`] keeps (about 3.4 KB
+/// per element: 56 MB).
+pub const CACHE_ELEMENTS: usize = 16_384;
+
+/// One element's force, energy and unprojected tangent.
+type Response = (ElemVec, f64, ElemMat);
+
+/// Element responses of the last tangent assembly and a copy of its state.
+#[derive(Debug, Default)]
+struct ResponseCache {
+    /// Whether `items` holds the responses of every element at `u`, `frames`.
+    valid: bool,
+    u: Vec<nalgebra::Vector3<f64>>,
+    frames: Vec<crate::element::DirectorFrame>,
+    items: Vec<Response>,
+}
+
+impl ResponseCache {
+    /// Whether `state` is bit for bit the state of the kept responses.
+    fn holds(&self, state: &State) -> bool {
+        let same = |a: &nalgebra::Vector3<f64>, b: &nalgebra::Vector3<f64>| a.iter().zip(b.iter()).all(|(x, y)| x.to_bits() == y.to_bits());
+        self.valid
+            && self.u.len() == state.u.len()
+            && self.frames.len() == state.frames.len()
+            && self.u.iter().zip(&state.u).all(|(a, b)| same(a, b))
+            && self.frames.iter().zip(&state.frames).all(|(a, b)| same(&a.d, &b.d) && same(&a.t1, &b.t1) && same(&a.t2, &b.t2))
+    }
+}
+
+/// A pointer to the kept responses, written by the tasks of an assembly at disjoint elements.
+#[derive(Clone, Copy)]
+struct ResponsePtr(*mut Response);
+
+// SAFETY: each element's entry is read or written by the one task that evaluates the element.
+unsafe impl Send for ResponsePtr {}
+// SAFETY: as above.
+unsafe impl Sync for ResponsePtr {}
+
+impl ResponsePtr {
+    /// Pointer to element e's entry (dereferenced only for e below the cache's length).
+    fn entry(self, e: usize) -> *mut Response {
+        self.0.wrapping_add(e)
+    }
 }
 
 /// Greedy colouring of the elements in index order: each element takes the lowest colour
@@ -166,6 +219,9 @@ pub struct AssemblyInfo {
     pub energy: f64,
     /// Wall time spent (s).
     pub seconds: f64,
+    /// Whether the element responses kept from the last tangent assembly of the same state
+    /// were scattered instead of evaluated ([`Assembler::keep_responses`]).
+    pub reused: bool,
 }
 
 impl Assembler {
@@ -341,7 +397,7 @@ impl Assembler {
             .collect();
         let constrained: Vec<bool> = model.elements.iter().map(|el| is_tied(el)).collect();
         let (colours, serial) = colour_elements(model, &constrained);
-        Self { pattern, slots, rules, geometry, orientation, tied, linked, colours, serial, project: false }
+        Self { pattern, slots, rules, geometry, orientation, tied, linked, colours, serial, project: false, keep_responses: false, cache: Mutex::new(ResponseCache::default()) }
     }
 
     /// Number of stored entries of the upper triangle.
@@ -461,9 +517,39 @@ impl Assembler {
                 *slot = Some(f);
             }
         };
+        // Kept element responses: reused when this is a tangent assembly of their state,
+        // else (re)filled by a tangent assembly.
+        let mut cache = self.cache.lock().unwrap_or_else(|p| p.into_inner());
+        let keep = with_tangent && self.keep_responses && n_el <= CACHE_ELEMENTS;
+        let reuse = keep && cache.items.len() == n_el && cache.holds(state);
+        if !reuse {
+            cache.valid = false;
+            if keep && cache.items.len() != n_el {
+                cache.items = vec![(ElemVec::zeros(), 0.0, ElemMat::zeros()); n_el];
+            }
+        }
+        let c_ptr = ResponsePtr(cache.items.as_mut_ptr());
+        // Element e's response, its tangent (unprojected) written into `k` when given.
+        let respond = |e: usize, k: Option<&mut ElemMat>| -> Result<(ElemVec, f64), AssemblyFailure> {
+            if reuse {
+                // SAFETY: e < n_el = cache.items.len(), and only this task touches entry e.
+                let (force, energy, kept) = unsafe { &*c_ptr.entry(e) };
+                if let Some(k) = k {
+                    *k = *kept;
+                }
+                return Ok((*force, *energy));
+            }
+            let mut k = k;
+            let (force, energy) = self.element_response(model, state, e, k.as_deref_mut())?;
+            if keep && let Some(k) = k {
+                // SAFETY: as above (keep: the cache holds n_el entries).
+                unsafe { *c_ptr.entry(e) = (force, energy, *k) };
+            }
+            Ok((force, energy))
+        };
         for colour in &self.colours {
             colour.par_iter().with_min_len(MIN_TASK).for_each_init(ElemMat::zeros, |k, &e| {
-                match self.element_response(model, state, e, with_tangent.then_some(&mut *k)) {
+                match respond(e, with_tangent.then_some(&mut *k)) {
                     Ok((force, energy)) => {
                         if with_tangent && self.project {
                             *k = project_psd(k);
@@ -491,7 +577,7 @@ impl Assembler {
                 let n = chunk.len();
                 if with_tangent {
                     chunk.par_iter().zip(out[..n].par_iter_mut()).zip(mats[..n].par_iter_mut()).with_min_len(MIN_SERIAL_TASK).for_each(|((&e, o), k)| {
-                        let r = self.element_response(model, state, e, Some(k));
+                        let r = respond(e, Some(k));
                         if r.is_ok() && self.project {
                             *k = project_psd(k);
                         }
@@ -499,7 +585,7 @@ impl Assembler {
                     });
                 } else {
                     chunk.par_iter().zip(out[..n].par_iter_mut()).with_min_len(MIN_SERIAL_TASK).for_each(|(&e, o)| {
-                        *o = Some(self.element_response(model, state, e, None));
+                        *o = Some(respond(e, None));
                     });
                 }
                 for (i, &e) in chunk.iter().enumerate() {
@@ -514,12 +600,21 @@ impl Assembler {
                 }
             }
         }
-        if let Some(f) = failure.into_inner().unwrap_or_else(|p| p.into_inner()) {
+        let failed = failure.into_inner().unwrap_or_else(|p| p.into_inner());
+        if keep && !reuse {
+            cache.valid = failed.is_none();
+            if cache.valid {
+                cache.u.clone_from(&state.u);
+                cache.frames.clone_from(&state.frames);
+            }
+        }
+        drop(cache);
+        if let Some(f) = failed {
             return Err(f);
         }
         let energy = energies.iter().fold(0.0, |s, e| s + e);
         model.dofs.fold(f_int);
-        Ok(AssemblyInfo { energy, seconds: t0.elapsed().as_secs_f64() })
+        Ok(AssemblyInfo { energy, seconds: t0.elapsed().as_secs_f64(), reused: reuse })
     }
 }
 
@@ -589,5 +684,41 @@ mod tests {
             assert!(one == two, "{name}: assembly differs between one and two threads");
             assert!(asm.n_colours() >= 2 && one.2 > 0.0);
         }
+    }
+
+    /// Kept element responses: a projected tangent assembly of the state of the last tangent
+    /// assembly scatters the kept responses and gives bit for bit what evaluating every
+    /// element again gives; another state is evaluated afresh (two-panel sleeve with tied
+    /// seams, strongly deformed so that element tangents are indefinite).
+    #[test]
+    fn kept_responses_give_the_same_projected_assembly() {
+        let text = include_str!("../../garments/sleeve_two_panel.ron");
+        let sc = scene::parse("sleeve", text).expect("scene");
+        let built = scene::build(&sc, "sleeve", text).expect("build");
+        let model = &built.model;
+        let state_of = |scale: f64| {
+            let mut state = model.initial_state();
+            let du: Vec<f64> = (0..model.dofs.n_free).map(|i| scale * ((i % 13) as f64 - 6.0)).collect();
+            model.update(&mut state, &du, 1.0);
+            state
+        };
+        let assemble = |asm: &Assembler, state: &State| {
+            let mut f = vec![0.0; NODE_DOFS * model.n_nodes()];
+            let mut v = vec![0.0; asm.nnz()];
+            let info = asm.assemble(model, state, &mut f, Some(&mut v)).expect("assembly");
+            ((f, v, info.energy), info.reused)
+        };
+        let (a, b) = (state_of(3e-3), state_of(2e-3));
+        // Reference: every element evaluated, tangents projected.
+        let mut fresh = Assembler::new(model);
+        fresh.project = true;
+        let (want_a, want_b) = (assemble(&fresh, &a).0, assemble(&fresh, &b).0);
+        let mut plain = Assembler::new(model);
+        let unprojected = assemble(&plain, &a);
+        plain.keep_responses = true;
+        assert!(assemble(&plain, &a) == (unprojected.0, false), "a first assembly evaluates every element");
+        plain.project = true;
+        assert!(assemble(&plain, &a) == (want_a, true), "kept responses, projected, differ from a fresh projected assembly");
+        assert!(assemble(&plain, &b) == (want_b, false), "another state must be evaluated afresh");
     }
 }
