@@ -6,8 +6,9 @@
 //! elements of a colour are evaluated and scattered in parallel (rayon) without locks, since
 //! they write disjoint slots and disjoint force entries, colour after colour. Elements with
 //! tied DOFs (whose entries go through the constraint weights to other nodes' equations)
-//! are assembled serially afterwards. Every slot receives its contributions in the same
-//! order whatever the number of threads, so the assembly is deterministic.
+//! come afterwards: evaluated in parallel, a chunk at a time, and scattered serially in
+//! index order. Every slot receives its contributions in the same order whatever the
+//! number of threads, so the assembly is deterministic.
 
 use std::time::Instant;
 
@@ -15,12 +16,14 @@ use rayon::prelude::*;
 
 use std::sync::Mutex;
 
-use nalgebra::Vector3;
-
 use crate::element::mixed::{extrapolate, point_count, unknown_change, Mixed, PointRecord};
-use crate::element::{orientation, DirectorFrame, ElemMat, ElemVec, ElementFailure, ElementGeometry, SectionRule, ELEMENT_DOFS, NODE_DOFS};
+use crate::element::{orientation, ElemMat, ElemVec, ElementFailure, ElementGeometry, SectionRule, ELEMENT_DOFS, NODE_DOFS};
 use crate::material::Voigt5;
 use crate::model::{Model, State, FIXED, UNTIED};
+
+mod store;
+pub use store::CACHE_ELEMENTS;
+use store::{MixedAccess, MixedStore, ResponseCache, ResponsePtr, MAX_MIXED_POINTS};
 
 const NO_SLOT: u32 = u32::MAX;
 /// Largest number of element colours (a node's colours are a 64-bit mask); elements that
@@ -28,6 +31,11 @@ const NO_SLOT: u32 = u32::MAX;
 const MAX_COLOURS: usize = 64;
 /// Fewest elements a rayon task takes.
 const MIN_TASK: usize = 32;
+/// Elements with tied DOFs evaluated in parallel before their serial scatter (bounds the
+/// buffer of element tangents: 128 × 3.2 KB).
+const SERIAL_CHUNK: usize = 128;
+/// Fewest elements with tied DOFs a rayon task takes.
+const MIN_SERIAL_TASK: usize = 4;
 
 /// Upper-triangular CSC pattern of the free-DOF tangent.
 #[derive(Clone, Debug)]
@@ -98,7 +106,8 @@ pub struct Assembler {
     /// Elements without tied DOFs grouped by colour: no two elements of a colour share a
     /// node, so their slots and force entries are disjoint.
     colours: Vec<Vec<usize>>,
-    /// Elements assembled serially after the colours (tied DOFs, or no colour left).
+    /// Elements scattered serially after the colours (tied DOFs, or no colour left), in
+    /// index order; their element responses are evaluated in parallel.
     serial: Vec<usize>,
     /// Replace each element's tangent by a positive semi-definite one before the scatter
     /// (eigenvalue filtering, [`project_psd`]): a descent direction for the energy where the
@@ -110,39 +119,16 @@ pub struct Assembler {
     pub mixed: bool,
     /// The records of the mixed-integration-point stresses.
     records: Mutex<MixedStore>,
+    /// Keep every element's response (force, energy, unprojected tangent) of a tangent
+    /// assembly, so that a tangent assembly of the same state — the projected re-assembly
+    /// of a time step whose tangent was indefinite — scatters them again instead of
+    /// evaluating every element anew (models of up to [`CACHE_ELEMENTS`] elements; the
+    /// result is the same bit for bit).
+    pub keep_responses: bool,
+    /// The responses kept by `keep_responses` and the state they belong to.
+    cache: Mutex<ResponseCache>,
 }
 
-/// Largest number of integration points per element for which mixed stresses are kept.
-const MAX_MIXED_POINTS: usize = 64;
-
-/// Configuration of an element's nodes (displacements and director frames).
-type ElementConfiguration = ([Vector3<f64>; 4], [DirectorFrame; 4]);
-
-/// Mixed-integration-point stress records of every element.
-#[derive(Debug, Default)]
-struct MixedStore {
-    /// First record of each element in `records` (n_el + 1 entries).
-    offsets: Vec<usize>,
-    /// Per integration point, the last tangent evaluation's [`PointRecord`].
-    records: Vec<PointRecord>,
-    /// The configuration of each element at its record (None: no valid record).
-    at: Vec<Option<ElementConfiguration>>,
-}
-
-/// Raw access to the [`MixedStore`] of one assembly, shared by the threads of a colour
-/// (each element touches only its own records).
-#[derive(Clone, Copy)]
-struct MixedAccess<'a> {
-    offsets: &'a [usize],
-    records: *mut PointRecord,
-    at: *mut Option<ElementConfiguration>,
-}
-
-// SAFETY: the pointers come from a store locked for the whole assembly, and every element
-// touches only its own records and configuration (disjoint ranges).
-unsafe impl Send for MixedAccess<'_> {}
-// SAFETY: as for Send.
-unsafe impl Sync for MixedAccess<'_> {}
 
 /// Greedy colouring of the elements in index order: each element takes the lowest colour
 /// that none of the elements already coloured at its nodes has. Elements marked in
@@ -201,6 +187,9 @@ pub struct AssemblyInfo {
     pub energy: f64,
     /// Wall time spent (s).
     pub seconds: f64,
+    /// Whether the element responses kept from the last tangent assembly of the same state
+    /// were scattered instead of evaluated ([`Assembler::keep_responses`]).
+    pub reused: bool,
 }
 
 impl Assembler {
@@ -382,7 +371,7 @@ impl Assembler {
             offsets.push(offsets.last().copied().unwrap_or(0) + if n <= MAX_MIXED_POINTS { n } else { 0 });
         }
         let records = Mutex::new(MixedStore { offsets, ..Default::default() });
-        Self { pattern, slots, rules, geometry, orientation, tied, linked, colours, serial, project: false, mixed: false, records }
+        Self { pattern, slots, rules, geometry, orientation, tied, linked, colours, serial, project: false, mixed: false, records, keep_responses: false, cache: Mutex::new(ResponseCache::default()) }
     }
 
     /// Drops every mixed-stress record, so the next tangent of each element is the standard
@@ -401,6 +390,11 @@ impl Assembler {
     /// Number of element colours of the parallel assembly (elements of a colour share no node).
     pub fn n_colours(&self) -> usize {
         self.colours.len()
+    }
+
+    /// Number of elements scattered serially after the colours (elements with tied DOFs).
+    pub fn n_serial(&self) -> usize {
+        self.serial.len()
     }
 
     /// Internal force, energy and (when `k` is given) tangent of element `e` in `state`.
@@ -541,9 +535,39 @@ impl Assembler {
                 *slot = Some(f);
             }
         };
+        // Kept element responses: reused when this is a tangent assembly of their state,
+        // else (re)filled by a tangent assembly.
+        let mut cache = self.cache.lock().unwrap_or_else(|p| p.into_inner());
+        let keep = with_tangent && self.keep_responses && n_el <= CACHE_ELEMENTS;
+        let reuse = keep && cache.items.len() == n_el && cache.holds(state);
+        if !reuse {
+            cache.valid = false;
+            if keep && cache.items.len() != n_el {
+                cache.items = vec![(ElemVec::zeros(), 0.0, ElemMat::zeros()); n_el];
+            }
+        }
+        let c_ptr = ResponsePtr(cache.items.as_mut_ptr());
+        // Element e's response, its tangent (unprojected) written into `k` when given.
+        let respond = |e: usize, k: Option<&mut ElemMat>| -> Result<(ElemVec, f64), AssemblyFailure> {
+            if reuse {
+                // SAFETY: e < n_el = cache.items.len(), and only this task touches entry e.
+                let (force, energy, kept) = unsafe { &*c_ptr.entry(e) };
+                if let Some(k) = k {
+                    *k = *kept;
+                }
+                return Ok((*force, *energy));
+            }
+            let mut k = k;
+            let (force, energy) = self.element_response_mixed(model, state, e, k.as_deref_mut(), mixed)?;
+            if keep && let Some(k) = k {
+                // SAFETY: as above (keep: the cache holds n_el entries).
+                unsafe { *c_ptr.entry(e) = (force, energy, *k) };
+            }
+            Ok((force, energy))
+        };
         for colour in &self.colours {
             colour.par_iter().with_min_len(MIN_TASK).for_each_init(ElemMat::zeros, |k, &e| {
-                match self.element_response_mixed(model, state, e, with_tangent.then_some(&mut *k), mixed) {
+                match respond(e, with_tangent.then_some(&mut *k)) {
                     Ok((force, energy)) => {
                         if with_tangent && self.project {
                             *k = project_psd(k);
@@ -560,26 +584,56 @@ impl Assembler {
                 }
             });
         }
-        let mut k = ElemMat::zeros();
-        for &e in &self.serial {
-            match self.element_response_mixed(model, state, e, with_tangent.then_some(&mut k), mixed) {
-                Ok((force, energy)) => {
-                    if with_tangent && self.project {
-                        k = project_psd(&k);
-                    }
-                    energies[e] = energy;
-                    self.scatter(model, e, &force, with_tangent.then_some(&k), f_int, values.as_deref_mut());
+        // Elements with tied DOFs: evaluated in parallel a chunk at a time, then scattered
+        // serially in index order (their entries go through the constraint weights to other
+        // nodes' equations), so every slot still receives its contributions in index order.
+        if !self.serial.is_empty() {
+            let len = SERIAL_CHUNK.min(self.serial.len());
+            let mut mats = if with_tangent { vec![ElemMat::zeros(); len] } else { Vec::new() };
+            let mut out: Vec<Option<Result<(ElemVec, f64), AssemblyFailure>>> = vec![None; len];
+            for chunk in self.serial.chunks(SERIAL_CHUNK) {
+                let n = chunk.len();
+                if with_tangent {
+                    chunk.par_iter().zip(out[..n].par_iter_mut()).zip(mats[..n].par_iter_mut()).with_min_len(MIN_SERIAL_TASK).for_each(|((&e, o), k)| {
+                        let r = respond(e, Some(k));
+                        if r.is_ok() && self.project {
+                            *k = project_psd(k);
+                        }
+                        *o = Some(r);
+                    });
+                } else {
+                    chunk.par_iter().zip(out[..n].par_iter_mut()).with_min_len(MIN_SERIAL_TASK).for_each(|(&e, o)| {
+                        *o = Some(respond(e, None));
+                    });
                 }
-                Err(f) => record(f),
+                for (i, &e) in chunk.iter().enumerate() {
+                    match out[i].take() {
+                        Some(Ok((force, energy))) => {
+                            energies[e] = energy;
+                            self.scatter(model, e, &force, mats.get(i), f_int, values.as_deref_mut());
+                        }
+                        Some(Err(f)) => record(f),
+                        None => {}
+                    }
+                }
             }
         }
+        let failed = failure.into_inner().unwrap_or_else(|p| p.into_inner());
+        if keep && !reuse {
+            cache.valid = failed.is_none();
+            if cache.valid {
+                cache.u.clone_from(&state.u);
+                cache.frames.clone_from(&state.frames);
+            }
+        }
+        drop(cache);
         drop(store);
-        if let Some(f) = failure.into_inner().unwrap_or_else(|p| p.into_inner()) {
+        if let Some(f) = failed {
             return Err(f);
         }
         let energy = energies.iter().fold(0.0, |s, e| s + e);
         model.dofs.fold(f_int);
-        Ok(AssemblyInfo { energy, seconds: t0.elapsed().as_secs_f64() })
+        Ok(AssemblyInfo { energy, seconds: t0.elapsed().as_secs_f64(), reused: reuse })
     }
 }
 
@@ -649,5 +703,41 @@ mod tests {
             assert!(one == two, "{name}: assembly differs between one and two threads");
             assert!(asm.n_colours() >= 2 && one.2 > 0.0);
         }
+    }
+
+    /// Kept element responses: a projected tangent assembly of the state of the last tangent
+    /// assembly scatters the kept responses and gives bit for bit what evaluating every
+    /// element again gives; another state is evaluated afresh (two-panel sleeve with tied
+    /// seams, in two deformed states).
+    #[test]
+    fn kept_responses_give_the_same_projected_assembly() {
+        let text = include_str!("../../garments/sleeve_two_panel.ron");
+        let sc = scene::parse("sleeve", text).expect("scene");
+        let built = scene::build(&sc, "sleeve", text).expect("build");
+        let model = &built.model;
+        let state_of = |scale: f64| {
+            let mut state = model.initial_state();
+            let du: Vec<f64> = (0..model.dofs.n_free).map(|i| scale * ((i % 13) as f64 - 6.0)).collect();
+            model.update(&mut state, &du, 1.0);
+            state
+        };
+        let assemble = |asm: &Assembler, state: &State| {
+            let mut f = vec![0.0; NODE_DOFS * model.n_nodes()];
+            let mut v = vec![0.0; asm.nnz()];
+            let info = asm.assemble(model, state, &mut f, Some(&mut v)).expect("assembly");
+            ((f, v, info.energy), info.reused)
+        };
+        let (a, b) = (state_of(1e-4), state_of(0.5e-4));
+        // Reference: every element evaluated, tangents projected.
+        let mut fresh = Assembler::new(model);
+        fresh.project = true;
+        let (want_a, want_b) = (assemble(&fresh, &a).0, assemble(&fresh, &b).0);
+        let mut plain = Assembler::new(model);
+        let unprojected = assemble(&plain, &a);
+        plain.keep_responses = true;
+        assert!(assemble(&plain, &a) == (unprojected.0, false), "a first assembly evaluates every element");
+        plain.project = true;
+        assert!(assemble(&plain, &a) == (want_a, true), "kept responses, projected, differ from a fresh projected assembly");
+        assert!(assemble(&plain, &b) == (want_b, false), "another state must be evaluated afresh");
     }
 }

@@ -470,6 +470,9 @@ impl<'m> Solver<'m> {
         let to_rest = incremental_potential && ds.duration == 0.0;
         let mut last_correction = f64::INFINITY;
         self.assembler.project = false;
+        // An indefinite tangent is projected by assembling the same state again: keep the
+        // element responses so that the re-assembly only projects and scatters them.
+        self.assembler.keep_responses = incremental_potential;
         self.model.apply_prescribed(state, scales);
         let mut energy = match self.assemble(state, scales, true) {
             Ok(e) => e,
