@@ -251,6 +251,8 @@ pub struct Solver<'m> {
     pub(super) extra_reports: Vec<serde_json::Value>,
     /// Node pairs coupled in the pattern for the nodal-force terms' pair blocks.
     pub(super) couplings: Vec<(usize, usize)>,
+    /// CSC positions of the last assembly's contact blocks (`nodal::BlockSlots`).
+    pub(super) block_slots: super::nodal::BlockSlots,
     /// Sum of the nodal-force terms' potentials at the last assembly (None: a term is not
     /// conservative).
     pub(super) nodal_potential: Option<f64>,
@@ -300,6 +302,7 @@ impl<'m> Solver<'m> {
             timings,
             extra_reports: Vec::new(),
             couplings: Vec::new(),
+            block_slots: Default::default(),
             nodal_potential: Some(0.0),
             clock: 0.0,
             clock_trial: 0.0,
@@ -334,6 +337,7 @@ impl<'m> Solver<'m> {
                 self.assembler = assembler;
                 self.cholesky = cholesky;
                 self.couplings = couplings;
+                self.block_slots.clear();
                 self.timings.pattern_growths += 1;
                 true
             }
@@ -446,16 +450,8 @@ impl<'m> Solver<'m> {
             self.f_ext.iter_mut().zip(&f).for_each(|(e, v)| *e += v);
             if tangent {
                 let p = &self.assembler.pattern;
-                for (n, j) in &jacobian {
-                    super::nodal::add_node_block(self.model, &p.col_ptr, &p.row_idx, &mut self.values, *n, j);
-                }
-                let mut outside = Vec::new();
-                for &(a, b, ref j) in &pairs {
-                    let p = &self.assembler.pattern;
-                    if !super::nodal::add_node_pair_block(self.model, &p.col_ptr, &p.row_idx, &mut self.values, a, b, j) {
-                        outside.push((a, b));
-                    }
-                }
+                self.block_slots.add_node_blocks(self.model, &p.col_ptr, &p.row_idx, &mut self.values, &jacobian);
+                let outside = self.block_slots.add_pair_blocks(self.model, &p.col_ptr, &p.row_idx, &mut self.values, &pairs);
                 if !outside.is_empty() {
                     // A pair came into contact outside the reference neighbourhood (rare):
                     // grow the pattern and assemble again; if that fails, drop the blocks.

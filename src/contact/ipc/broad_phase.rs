@@ -4,7 +4,7 @@
 //! triangles (edges) is queried with each point's (edge's) box, so the search costs
 //! O(n log n), not O(n²).
 
-use std::sync::Arc;
+use std::sync::{Arc, Mutex};
 
 use nalgebra::Vector3;
 use parry3d_f64::bounding_volume::Aabb;
@@ -34,12 +34,52 @@ pub struct Pads<'a> {
     pub edge: &'a [f64],
 }
 
+/// Whether the boxes of two primitives — each spanning its nodes' positions in every
+/// configuration of `configs`, inflated by its pad — overlap (boundaries included): the test
+/// [`candidates`] applies, repeated on one pair.
+pub fn boxes_overlap(a: &[usize], pad_a: f64, b: &[usize], pad_b: f64, configs: &[&dyn Fn(usize) -> Vector3<f64>]) -> bool {
+    let ba = aabb(configs.iter().flat_map(|x| a.iter().map(move |&n| x(n))), pad_a);
+    let bb = aabb(configs.iter().flat_map(|x| b.iter().map(move |&n| x(n))), pad_b);
+    (0..3).all(|k| ba.mins[k] <= bb.maxs[k] && bb.mins[k] <= ba.maxs[k])
+}
+
+/// A refit after this many calls is replaced by a fresh build: refitting keeps the tree's
+/// topology, whose boxes loosen as the surface deforms far from where it was built.
+const REBUILD_AFTER: usize = 64;
+
+/// Bounding-volume hierarchies of the triangles and of the edges, kept between searches: a
+/// later search refits them to its boxes (a linear pass over the tree, parry3d's
+/// `Bvh::refit_without_opt`) instead of building them anew (a binned SAH build, about as
+/// costly as the queries themselves on a sewn sleeve).
+#[derive(Default)]
+pub struct Trees {
+    tri: Option<Bvh>,
+    edge: Option<Bvh>,
+    refits: usize,
+}
+
+/// `tree` fitted to the leaf boxes `boxes`: refitted when it has their number of leaves,
+/// else built.
+fn fit(tree: &mut Option<Bvh>, boxes: &[Aabb], rebuild: bool) {
+    match tree.as_mut() {
+        Some(t) if !rebuild && t.leaf_count() as usize == boxes.len() => {
+            for (i, b) in boxes.iter().enumerate() {
+                let _ = t.update_partially_if_present(*b, i as u32, 0.0);
+            }
+            t.refit_without_opt();
+        }
+        _ => *tree = Some(Bvh::from_leaves(BvhBuildStrategy::default(), boxes)),
+    }
+}
+
 /// Candidate pairs (point index, triangle index) and (edge index a, edge index b), a < b,
 /// whose boxes, inflated by their `pads`, overlap: every pair of primitives closer than the
 /// sum of their pads is among them. Each primitive's box spans its nodes' positions in every
 /// configuration of `configs` (one: a configuration; two: a straight sweep between them,
 /// which stays inside the box). `point_ok(p, t)` and `edge_ok(a, b)` filter out excluded
-/// pairs.
+/// pairs. The pairs come sorted (by point, then triangle; by edge a, then b), whatever the
+/// trees' shape. `trees` holds the hierarchies between calls (refitted here).
+#[allow(clippy::too_many_arguments)]
 pub fn candidates(
     points: &[usize],
     tris: &[[usize; 3]],
@@ -48,23 +88,33 @@ pub fn candidates(
     pads: &Pads,
     point_ok: &(dyn Fn(usize, usize) -> bool + Sync),
     edge_ok: &(dyn Fn(usize, usize) -> bool + Sync),
+    trees: &Mutex<Trees>,
 ) -> (Vec<(usize, usize)>, Vec<(usize, usize)>) {
     let tri_boxes: Vec<Aabb> = tris.iter().zip(pads.tri).map(|(t, &r)| aabb(configs.iter().flat_map(|x| t.iter().map(move |&n| x(n))), r)).collect();
     let edge_boxes: Vec<Aabb> = edges.iter().zip(pads.edge).map(|(e, &r)| aabb(configs.iter().flat_map(|x| e.iter().map(move |&n| x(n))), r)).collect();
     let point_boxes: Vec<Aabb> = points.iter().zip(pads.point).map(|(&n, &r)| aabb(configs.iter().map(|x| x(n)), r)).collect();
-    let tri_bvh = Bvh::from_leaves(BvhBuildStrategy::default(), &tri_boxes);
-    let edge_bvh = Bvh::from_leaves(BvhBuildStrategy::default(), &edge_boxes);
+    let mut guard = trees.lock().unwrap_or_else(|e| e.into_inner());
+    let t = &mut *guard;
+    let rebuild = t.refits >= REBUILD_AFTER;
+    t.refits = if rebuild { 0 } else { t.refits + 1 };
+    fit(&mut t.tri, &tri_boxes, rebuild);
+    fit(&mut t.edge, &edge_boxes, rebuild);
+    let (Some(tri_bvh), Some(edge_bvh)) = (t.tri.as_ref(), t.edge.as_ref()) else {
+        return (Vec::new(), Vec::new());
+    };
     let pt: Vec<(usize, usize)> = (0..points.len())
         .into_par_iter()
         .flat_map_iter(|i| {
-            let hits: Vec<(usize, usize)> = tri_bvh.intersect_aabb(&point_boxes[i]).map(|t| (i, t as usize)).filter(|&(i, t)| point_ok(i, t)).collect();
+            let mut hits: Vec<(usize, usize)> = tri_bvh.intersect_aabb(&point_boxes[i]).map(|t| (i, t as usize)).filter(|&(i, t)| point_ok(i, t)).collect();
+            hits.sort_unstable();
             hits.into_iter()
         })
         .collect();
     let ee: Vec<(usize, usize)> = (0..edges.len())
         .into_par_iter()
         .flat_map_iter(|a| {
-            let hits: Vec<(usize, usize)> = edge_bvh.intersect_aabb(&edge_boxes[a]).map(|b| b as usize).filter(|&b| a < b && edge_ok(a, b)).map(|b| (a, b)).collect();
+            let mut hits: Vec<(usize, usize)> = edge_bvh.intersect_aabb(&edge_boxes[a]).map(|b| b as usize).filter(|&b| a < b && edge_ok(a, b)).map(|b| (a, b)).collect();
+            hits.sort_unstable();
             hits.into_iter()
         })
         .collect();

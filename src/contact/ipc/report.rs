@@ -51,4 +51,7 @@ pub struct SurfaceTimings {
     pub ccd_calls: usize,
     /// Of them, those that shortened the step (a fraction below 1).
     pub ccd_limited: usize,
+    /// Of them, those that searched the trees for their candidates (the others filtered
+    /// the candidates kept from an earlier sweep, `surface::Near`).
+    pub ccd_searches: usize,
 }

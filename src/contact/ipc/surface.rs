@@ -35,7 +35,10 @@
 //! Collision detection: every Newton step is shortened to the largest fraction along which no
 //! pair's gap falls below 10 % of its value (conservative advancement with the bound
 //! |Δdist| ≤ max|Δx| of each primitive's nodes; the additive CCD of Li, Kaufman & Jiang 2021
-//! in its plain form; `contact::ccd`).
+//! in its plain form; `contact::ccd`). Its candidates come from a list kept between sweeps
+//! with a margin (a Verlet list, [`Near`]), filtered by each sweep's own box test, so that
+//! the trees are searched only when a node has moved beyond the margin; the trees themselves
+//! are refitted, not rebuilt (`broad_phase::Trees`).
 //!
 //! Cost: the pairs' energies are summed per closest feature before the distance is
 //! differentiated, in closed form (`distance.rs`; `potential.rs`: stacked plies give dozens of pairs per stacked vertex pair,
@@ -50,7 +53,7 @@ use std::time::Instant;
 use nalgebra::{Matrix3, Vector3};
 use rayon::prelude::*;
 
-use super::broad_phase::{candidates, Pads, Sweep};
+use super::broad_phase::{boxes_overlap, candidates, Pads, Sweep, Trees};
 use super::friction::{Friction, FrictionTerm};
 use super::potential::{derivative, group, mollified_derivative, Blocks, Derivative, FeatureKey, FxMap, Scalar};
 pub use super::report::{SurfaceIncrement, SurfaceTimings};
@@ -78,6 +81,10 @@ const MOLLIFIER: f64 = 1e-3;
 /// Slack of the sweep boxes, as a fraction of the smallest pad (see [`Sweep`]).
 const SWEEP_SLACK: f64 = 1e-6;
 
+/// Margin of the collision-detection candidates kept between sweeps (see [`Near`]), as a
+/// multiple of `reach` (twice the largest half thickness).
+const NEAR_MARGIN: f64 = 1.0;
+
 /// A candidate pair: kind, key, nodes and reference constants.
 type Pair = (Kind, (usize, usize), [usize; 4], Constants);
 
@@ -95,6 +102,19 @@ struct Constants {
     dhat: f64,
     /// Mollifier threshold (edge–edge), 0 for point–triangle.
     eps: f64,
+}
+
+/// Candidates kept between collision-detection sweeps (a Verlet list): found with each
+/// primitive's sweep pad widened by a margin M around each point's box `lo`..`hi` over the
+/// sweep they were found for, they hold every candidate of any later sweep whose every point
+/// stays within M of its box: a point's new box lies inside its old box grown by M, so a
+/// triangle's or an edge's (spanned by its nodes' boxes) inside its old one grown by M, and
+/// two new boxes, each inflated by its pad, overlap only if the old ones inflated by pad + M
+/// do. Such a sweep filters these pairs by its own box test instead of searching the trees.
+struct Near {
+    lo: Vec<Vector3<f64>>,
+    hi: Vec<Vector3<f64>>,
+    pairs: Vec<Pair>,
 }
 
 /// Evaluation of one active pair.
@@ -150,6 +170,13 @@ pub struct SurfaceContact {
     slack: f64,
     /// The candidates of the last collision-detection sweep.
     sweep: Mutex<Option<Sweep<Pair>>>,
+    /// The sweep pads widened by the margin M of [`Near`], and M.
+    near_pads: (Vec<f64>, Vec<f64>, Vec<f64>),
+    near_margin: f64,
+    /// Candidates kept between collision-detection sweeps.
+    near: Mutex<Option<Near>>,
+    /// The broad phase's trees, refitted from search to search.
+    trees: Mutex<Trees>,
     friction: FxMap<(Kind, usize, usize), Friction>,
     /// Reference constants per candidate pair (None: excluded), filled as pairs come near.
     constants: RwLock<FxMap<(Kind, usize, usize), Option<Constants>>>,
@@ -258,6 +285,9 @@ impl SurfaceContact {
         let slack = SWEEP_SLACK * point_pad.iter().copied().filter(|&r| r > 0.0).fold(f64::INFINITY, f64::min).min(1.0);
         let widen = |v: &[f64]| v.iter().map(|r| r + slack).collect::<Vec<f64>>();
         let sweep_pads = (widen(&point_pad), widen(&tri_pad), widen(&edge_pad));
+        let near_margin = NEAR_MARGIN * reach;
+        let grow = |v: &[f64]| v.iter().map(|r| r + near_margin).collect::<Vec<f64>>();
+        let near_pads = (grow(&sweep_pads.0), grow(&sweep_pads.1), grow(&sweep_pads.2));
         Self {
             x_ref: model.x0.clone(),
             points,
@@ -281,6 +311,10 @@ impl SurfaceContact {
             sweep_pads,
             slack,
             sweep: Mutex::new(None),
+            near_pads,
+            near_margin,
+            near: Mutex::new(None),
+            trees: Mutex::new(Trees::default()),
             friction: FxMap::default(),
             constants: RwLock::new(FxMap::default()),
             last: Vec::new(),
@@ -376,7 +410,7 @@ impl SurfaceContact {
     /// Candidate pairs near configuration(s) `configs`, with their nodes and constants (from
     /// the cache of reference constants; those of pairs new to it are computed and kept).
     fn pairs(&self, configs: &[&dyn Fn(usize) -> Vector3<f64>], pads: &Pads) -> Vec<(Kind, (usize, usize), [usize; 4], Constants)> {
-        let (pt, ee) = candidates(&self.points, &self.tris, &self.edges, configs, pads, &|i, t| self.point_ok(i, t), &|a, b| self.edge_ok(a, b));
+        let (pt, ee) = candidates(&self.points, &self.tris, &self.edges, configs, pads, &|i, t| self.point_ok(i, t), &|a, b| self.edge_ok(a, b), &self.trees);
         let all: Vec<(Kind, (usize, usize))> = pt.into_iter().map(|k| (Kind::PointTriangle, k)).chain(ee.into_iter().map(|k| (Kind::EdgeEdge, k))).collect();
         let cached: Vec<Option<Option<Constants>>> = {
             let cache = self.constants.read().unwrap_or_else(|e| e.into_inner());
@@ -404,6 +438,42 @@ impl SurfaceContact {
             self.constants.write().unwrap_or_else(|e| e.into_inner()).extend(computed);
         }
         out
+    }
+
+    /// Whether the boxes of candidate `pair` over `configs`, inflated by its primitives'
+    /// `pads`, overlap (the broad phase's test for this one pair).
+    fn pair_overlaps(&self, pair: &Pair, configs: &[&dyn Fn(usize) -> Vector3<f64>], pads: &Pads) -> bool {
+        let (kind, (i, j), _, _) = *pair;
+        match kind {
+            Kind::PointTriangle => boxes_overlap(&[self.points[i]], pads.point[i], &self.tris[j], pads.tri[j], configs),
+            Kind::EdgeEdge => boxes_overlap(&self.edges[i], pads.edge[i], &self.edges[j], pads.edge[j], configs),
+        }
+    }
+
+    /// The candidates of the sweep from `x0` to `x1` (each point's box `lo`..`hi` over it)
+    /// with the sweep pads: the same pairs, in the same order, as a search of the trees, but
+    /// filtered from the kept candidates of [`Near`] while every point stays within their
+    /// margin, and searched (with the margin) only when one leaves it.
+    fn sweep_pairs(&self, x0: &dyn Fn(usize) -> Vector3<f64>, x1: &dyn Fn(usize) -> Vector3<f64>, lo: &[Vector3<f64>], hi: &[Vector3<f64>]) -> Vec<Pair> {
+        let (pp, tp, ep) = &self.sweep_pads;
+        let pads = Pads { point: pp, tri: tp, edge: ep };
+        let configs: [&dyn Fn(usize) -> Vector3<f64>; 2] = [x0, x1];
+        let mut near = self.near.lock().unwrap_or_else(|e| e.into_inner());
+        // Within the margin (less a relative 10⁻⁹, against round-off at touching boxes).
+        let m = Vector3::repeat(self.near_margin * (1.0 - 1e-9));
+        let covered = near.as_ref().is_some_and(|n| {
+            n.lo.len() == lo.len() && (0..lo.len()).all(|i| (n.lo[i] - m).iter().zip(lo[i].iter()).all(|(a, b)| a <= b) && (n.hi[i] + m).iter().zip(hi[i].iter()).all(|(a, b)| b <= a))
+        });
+        if !covered {
+            let (np, nt, ne) = &self.near_pads;
+            let pairs = self.pairs(&configs, &Pads { point: np, tri: nt, edge: ne });
+            *near = Some(Near { lo: lo.to_vec(), hi: hi.to_vec(), pairs });
+            if let Ok(mut tm) = self.timings.lock() {
+                tm.ccd_searches += 1;
+            }
+        }
+        let Some(n) = near.as_ref() else { return Vec::new() };
+        n.pairs.iter().filter(|p| self.pair_overlaps(p, &configs, &pads)).copied().collect()
     }
 
     /// The active pairs at `state` (gap below d̂): gap, energy κ_p m_p b(d, d̂_p), normal force
@@ -561,8 +631,9 @@ impl NodalForces for SurfaceContact {
         let t = Instant::now();
         let x0 = |a: usize| model.x0[a] + from.u[a];
         let x1 = |a: usize| model.x0[a] + to.u[a];
-        let (pp, tp, ep) = &self.sweep_pads;
-        let pairs = Arc::new(self.pairs(&[&x0, &x1], &Pads { point: pp, tri: tp, edge: ep }));
+        let lo: Vec<Vector3<f64>> = self.points.iter().map(|&a| x0(a).inf(&x1(a))).collect();
+        let hi: Vec<Vector3<f64>> = self.points.iter().map(|&a| x0(a).sup(&x1(a))).collect();
+        let pairs = Arc::new(self.sweep_pairs(&x0, &x1, &lo, &hi));
         let s = pairs
             .par_iter()
             .map(|&(kind, _, nodes, c)| {
@@ -588,8 +659,6 @@ impl NodalForces for SurfaceContact {
                 conservative_advancement(gap_at(0.0), m1 + m2, CCD_CLOSE, 100, |s| Some(gap_at(s)))
             })
             .reduce(|| 1.0, f64::min);
-        let lo = self.points.iter().map(|&a| x0(a).inf(&x1(a))).collect();
-        let hi = self.points.iter().map(|&a| x0(a).sup(&x1(a))).collect();
         if let Ok(mut sw) = self.sweep.lock() {
             *sw = Some(Sweep::new(lo, hi, pairs));
         }
