@@ -95,8 +95,12 @@ fn stiffer_fabric_drapes_to_a_higher_coefficient() {
 /// also keep penetration below 5 % of the thickness.
 #[test]
 fn drape_coefficient_converges_under_mesh_refinement() {
-    let coarse = cusick_on("polyester_faille", 0, 96);
-    let fine = cusick_on("polyester_faille", 0, 128);
+    // The two meshes solve side by side (two threads), as the runs of the test above do.
+    let (coarse, fine) = std::thread::scope(|s| {
+        let coarse = s.spawn(|| cusick_on("polyester_faille", 0, 96));
+        let fine = cusick_on("polyester_faille", 0, 128);
+        (coarse.join().expect("96-sector run"), fine)
+    });
     let change = fine.dc - coarse.dc;
     assert!(change.abs() < 3.0, "faille DC moved {change:.2} points from 96 sectors ({:.2} %) to 128 ({:.2} %)", coarse.dc, fine.dc);
     assert!(coarse.penetration_over_h < 0.05 && fine.penetration_over_h < 0.05, "penetration {} / {} of h", coarse.penetration_over_h, fine.penetration_over_h);
