@@ -822,6 +822,11 @@ impl<'m> Solver<'m> {
             // (measured on the sheet dropped onto a sphere, 32²: 764 Newton iterations
             // without, 1,193 with; on the sagging plate 20², 188–243 without, 72–118 with).
             self.assembler.mixed = self.settings.mixed_stress && matches!(step.kind, StepKind::Static | StepKind::ArcLength { .. } | StepKind::DisplacementControl { .. });
+            if !self.assembler.mixed {
+                // Records are not kept up to date in this step: a later static step must not
+                // extrapolate from them.
+                self.assembler.forget_mixed();
+            }
             match &step.kind {
                 StepKind::Static | StepKind::StaticDamped => {}
                 StepKind::Dynamic(ds) => {
