@@ -68,6 +68,12 @@ const FAILURE_STREAK: usize = 6;
 /// fraction of the step's largest nodal motion (see `time_step`).
 const INEXACT_MOTION: f64 = 1e-3;
 
+/// Largest relative residual of the best iterate at which a time step to rest that did not
+/// converge is accepted instead of being retried with a smaller Δt (see
+/// `Solver::accept_best`); 10³ × the default Newton residual tolerance, the bound the Newton
+/// test already accepts with a converged energy norm.
+const INEXACT_BEST: f64 = 1e-4;
+
 /// Controls of a `Dynamic` step (SI units or any consistent set; times in the model's
 /// time unit).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -109,8 +115,10 @@ pub struct DynamicSettings {
     pub duration: f64,
     /// Solve each backward-Euler step as the minimisation of its incremental potential
     /// (energy line search, PSD-projected element Hessians where the tangent is indefinite,
-    /// inexact steps away from rest; see `time_step`). Default: on with barrier contact,
-    /// otherwise off (the safeguarded Newton update).
+    /// inexact steps away from rest; see `time_step`). Default: on for steps to rest
+    /// (`duration` 0) and with barrier contact, otherwise off (the safeguarded Newton
+    /// update). Terms without a potential (friction other than the barrier's lagged one)
+    /// fall back to the safeguarded update.
     pub incremental_potential: Option<bool>,
 }
 
@@ -465,10 +473,12 @@ impl<'m> Solver<'m> {
         let mut energy0: Option<f64> = None;
         let mut static_r = vec![0.0; n];
         let co = Coefficients::new(&ds.scheme, dt, ds.mass_damping);
-        let wanted = ds.incremental_potential.unwrap_or_else(|| self.nodal_forces.iter().any(|c| c.is_barrier()));
-        let incremental_potential = wanted && matches!(ds.scheme, TimeScheme::BackwardEuler);
+        let incremental_potential = self.incremental_potential(ds);
         let to_rest = incremental_potential && ds.duration == 0.0;
         let mut last_correction = f64::INFINITY;
+        // The best iterate of a step to rest (lowest relative residual): (residual, state,
+        // strain energy, static residual, static residual vector).
+        let mut best: Option<(f64, State, f64, f64, Vec<f64>)> = None;
         self.assembler.project = false;
         // An indefinite tangent is projected by assembling the same state again: keep the
         // element responses so that the re-assembly only projects and scatters them.
@@ -504,6 +514,25 @@ impl<'m> Solver<'m> {
                     self.assembler.project = false;
                     return TimeStep::Converged { iterations: it, residuals, static_residual: static_rel, energy, static_r };
                 }
+            }
+            if to_rest && best.as_ref().is_none_or(|b| rel < b.0) {
+                best = Some((rel, state.clone(), energy, static_rel, static_r.clone()));
+            }
+            // Leaving a saddle of the incremental potential: the energy falls but the residual
+            // grows geometrically from its best value (the descent follows negative
+            // curvature towards a distant minimum). Stop at once: the best iterate ends the
+            // step if it is close enough, else Δt is cut.
+            let diverging = to_rest
+                && residuals.len() >= 4
+                && best.as_ref().is_some_and(|b| rel > 3.0 * b.0)
+                && residuals[residuals.len() - 4..].windows(2).all(|w| w[1] > 1.2 * w[0]);
+            if diverging {
+                self.assembler.project = false;
+                if let Some(done) = self.accept_best(state, scales, &mut best, it, &mut residuals) {
+                    return done;
+                }
+                let el = self.worst_element(&r);
+                return TimeStep::Failed { iteration: it, residuals, worst_element: el, cause: "the residual grew geometrically from its best value (a saddle of the step's potential)".into() };
             }
             if it == ds.max_iterations {
                 break;
@@ -582,11 +611,17 @@ impl<'m> Solver<'m> {
                 }
                 Err((el, cause)) => {
                     self.assembler.project = false;
+                    if let Some(done) = self.accept_best(state, scales, &mut best, it + 1, &mut residuals) {
+                        return done;
+                    }
                     return TimeStep::Failed { iteration: it, residuals, worst_element: el, cause };
                 }
             }
         }
         self.assembler.project = false;
+        if let Some(done) = self.accept_best(state, scales, &mut best, ds.max_iterations, &mut residuals) {
+            return done;
+        }
         let el = self.worst_element(&r);
         TimeStep::Failed {
             iteration: ds.max_iterations,
@@ -594,6 +629,29 @@ impl<'m> Solver<'m> {
             worst_element: el,
             cause: format!("no convergence in {} iterations", ds.max_iterations),
         }
+    }
+
+    /// Whether the time steps of a Dynamic step with settings `ds` minimise their incremental
+    /// potential (`DynamicSettings::incremental_potential`; default: backward-Euler steps to
+    /// rest, and any backward-Euler step with barrier contact).
+    fn incremental_potential(&self, ds: &DynamicSettings) -> bool {
+        let wanted = ds.incremental_potential.unwrap_or_else(|| ds.duration == 0.0 || self.nodal_forces.iter().any(|c| c.is_barrier()));
+        wanted && matches!(ds.scheme, TimeScheme::BackwardEuler)
+    }
+
+    /// A step to rest whose Newton iteration did not converge (it diverged from a saddle of
+    /// the incremental potential after nearly reaching it, or stalled) ends at its best
+    /// iterate when that iterate's relative residual is within [`INEXACT_BEST`]: `state` is
+    /// set to it and assembled again (forces and contact state consistent for the commit).
+    /// Pseudo-transient steps away from rest need not be exact (Kelley & Keyes 1998); rest
+    /// itself is still judged on the static residual and the kinetic energy.
+    fn accept_best(&mut self, state: &mut State, scales: &[f64], best: &mut Option<(f64, State, f64, f64, Vec<f64>)>, iterations: usize, residuals: &mut Vec<f64>) -> Option<TimeStep> {
+        let (rel, at, energy, static_residual, static_r) = best.take().filter(|b| b.0 <= INEXACT_BEST)?;
+        *state = at;
+        self.assembler.forget_mixed();
+        self.assemble(state, scales, true).ok()?;
+        residuals.push(rel);
+        Some(TimeStep::Converged { iterations, residuals: std::mem::take(residuals), static_residual, energy, static_r })
     }
 
     /// Static tangent at `state` for the stability test: the nodal-force terms report their
@@ -840,9 +898,7 @@ impl<'m> Solver<'m> {
         fraction_step: f64,
     ) -> Result<(), SolveError> {
         let model = self.model;
-        let minimising = ds.incremental_potential.unwrap_or_else(|| self.nodal_forces.iter().any(|c| c.is_barrier()))
-            && matches!(ds.scheme, TimeScheme::BackwardEuler)
-            && ds.duration == 0.0;
+        let minimising = self.incremental_potential(ds) && ds.duration == 0.0;
         let mass = if minimising { LumpedMass::for_rest(model, ds.rotary_inertia) } else { LumpedMass::from_model(model, ds.rotary_inertia) };
         let error = |iteration: usize, residuals: Vec<f64>, worst_element: Option<usize>, cause: String, t: f64| SolveError {
             step: si,
@@ -1056,6 +1112,11 @@ impl<'m> Solver<'m> {
                         _ => failure_streak = (None, 0),
                     }
                     indefinite |= matches!(outcome, TimeStep::Indefinite { .. });
+                    // The rejected step's iterations are spent work: count them.
+                    iterations += match &outcome {
+                        TimeStep::Indefinite { iteration, .. } | TimeStep::Failed { iteration, .. } => *iteration,
+                        TimeStep::Converged { .. } => 0,
+                    };
                     *state = prev.state.clone();
                     self.assembler.forget_mixed();
                     rejected += 1;
