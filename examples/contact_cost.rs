@@ -4,9 +4,9 @@
 //! (the solver's contact timer — pair evaluation and the scatter of its tangent blocks — over
 //! the wall time; and with collision detection and commits added), active pairs per contact
 //! node, the smallest gap over d̂, the Newton iterations, and the factorization's time and
-//! the Cholesky factor's size with contact on and off (the contact blocks couple the plies
-//! in the tangent's pattern, and the fill they cause is a cost of contact the contact timer
-//! does not see).
+//! the Cholesky factor's size at the end with contact on and off (the contact blocks couple
+//! the plies in the tangent's pattern, and the fill they cause is a cost of contact the
+//! contact timer does not see), and how often the pattern grew for blocks outside it.
 //!
 //! cargo run --release --example contact_cost -- [SCENE.ron ...] [--no-off]
 //!
@@ -17,9 +17,13 @@
 
 use std::path::Path;
 
-use plyshell::{analysis, scene};
+use plyshell::scene;
+use plyshell::solver::Solver;
 
-/// One run: (wall s, Newton iterations, summary as JSON).
+/// One run: (wall s, Newton iterations, a summary as JSON: `timings` (the solver's), `sizes`
+/// (`factor_nnz` at the end, after any growth of the pattern) and the surface contact's
+/// section `surface_contact`). The solve is that of `plyshell solve` (body contact, surface
+/// contact and compliant seams attached, the steps run), without output.
 fn solve(path: &Path, contact: bool) -> Result<(f64, usize, serde_json::Value), String> {
     let file = path.display().to_string();
     let text = std::fs::read_to_string(path).map_err(|e| format!("{file}: {e}"))?;
@@ -31,20 +35,42 @@ fn solve(path: &Path, contact: bool) -> Result<(f64, usize, serde_json::Value), 
         }
     }
     let built = scene::build(&sc, &file, &text).map_err(|e| e.to_string())?;
-    let summary = analysis::run(&sc, &built, &analysis::RunOptions::default(), &mut |_| {}).map_err(|e| format!("{file}: {e}"))?;
-    let json = serde_json::to_value(&summary).map_err(|e| e.to_string())?;
-    Ok((summary.wall_s, summary.newton_iterations, json))
+    let model = &built.model;
+    let t = std::time::Instant::now();
+    let mut solver = Solver::new(model, sc.solver.clone())?;
+    if let Some(c) = &built.contact {
+        plyshell::contact::attach(&mut solver, model, c)?;
+    }
+    if let Some(s) = &built.interply {
+        plyshell::contact::interply::attach(&mut solver, model, s)?;
+    }
+    if let Some(c) = plyshell::garment::compliant::CompliantSeams::new(&built.seams) {
+        solver.add_nodal_forces(Box::new(c));
+    }
+    let mut state = model.initial_state();
+    let mut iterations = 0usize;
+    let run = solver.run(&built.steps, &mut state, &mut |r, _, _| iterations += r.iterations, &mut |_| {});
+    run.map_err(|e| format!("{file}: {e} (after {iterations} Newton iterations; {:?})", solver.timings))?;
+    let wall = t.elapsed().as_secs_f64();
+    let mut json = serde_json::json!({
+        "timings": serde_json::to_value(&solver.timings).map_err(|e| e.to_string())?,
+        "sizes": {"factor_nnz": solver.sizes().2},
+    });
+    for (name, value) in solver.nodal_forces().iter().filter_map(|f| f.summary()) {
+        json[name] = value;
+    }
+    Ok((wall, iterations, json))
 }
 
 fn main() -> Result<(), String> {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let off = !args.iter().any(|a| a == "--no-off");
-    let mut scenes: Vec<String> = args.into_iter().filter(|a| a != "--no-off").collect();
+    let mut scenes: Vec<String> = args.into_iter().filter(|a| !a.starts_with("--")).collect();
     if scenes.is_empty() {
         scenes.push(concat!(env!("CARGO_MANIFEST_DIR"), "/garments/nbc_sleeve.ron").into());
     }
-    println!("| scene | wall on (s) | wall off (s) | contact share | incl. CCD + commit | pairs/node (max) | min gap/d̂ | Newton on | Newton off | factorization on / off (s) | factor entries on / off |");
-    println!("|---|---|---|---|---|---|---|---|---|---|---|");
+    println!("| scene | wall on (s) | wall off (s) | contact share | incl. CCD + commit | pairs/node (max) | min gap/d̂ | Newton on | Newton off | factorization on / off (s) | factor entries on / off | pattern growths |");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
     for s in &scenes {
         let path = Path::new(s);
         let (wall, iters, json) = solve(path, true)?;
@@ -63,11 +89,12 @@ fn main() -> Result<(), String> {
         };
         let name = path.file_name().map_or(s.clone(), |n| n.to_string_lossy().into_owned());
         println!(
-            "| {name} | {wall:.1} | {wall_off} | {:.1} % | {:.1} % | {:.1} | {:.3} | {iters} | {iters_off} | {fact_on:.1} / {fact_off} | {nnz_on} / {nnz_off} |",
+            "| {name} | {wall:.1} | {wall_off} | {:.1} % | {:.1} % | {:.1} | {:.3} | {iters} | {iters_off} | {fact_on:.1} / {fact_off} | {nnz_on} / {nnz_off} | {} |",
             100.0 * contact / wall,
             100.0 * (contact + ccd + commit) / wall,
             f(&sc["max_pairs_per_node"]),
             f(&sc["min_gap_ratio"]),
+            json["timings"]["pattern_growths"],
         );
     }
     Ok(())
