@@ -21,10 +21,11 @@ use super::quadrature::gauss_legendre;
 use super::shell4::{ElementFailure, Section, ShearTreatment, ShellElement};
 
 /// Largest number of distinct base-vector forms of a rule kept in the kernel's stack
-/// scratch (5 thickness levels of MITC4 need 54, MITC4+ at most 10 more mid-surface forms;
-/// laminate rules with more levels use heap scratch) and of distinct pair strains of one
-/// thickness level (MITC4: 15).
-pub(super) const MAX_FORMS: usize = 64 + 8;
+/// scratch (the forms of up to 5 thickness levels, with the split forms of their resultants
+/// and the MITC4+ mid-surface forms: `resultant_forces_equal_the_level_by_level_sums` checks
+/// that they fit; laminate rules with more levels use heap scratch) and of distinct pair
+/// strains of one thickness level (MITC4: 15).
+pub(super) const MAX_FORMS: usize = 88;
 /// See [`MAX_FORMS`].
 pub(super) const MAX_PAIRS: usize = 16;
 /// Fewest thickness levels for which the kernel sums the pair stresses through the thickness

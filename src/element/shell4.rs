@@ -346,17 +346,16 @@ impl<'a> ShellElement<'a> {
         let with_tangent = TANGENT && k.is_some();
         // Changes Δp of the rule's forms.
         // (Stack scratch, or heap scratch for the long rules of many-ply laminates.)
-        let mut df_stack = [Vector3::zeros(); MAX_FORMS];
+        let n_forms = rule.forms.len();
+        let eval = |i: usize| if i < n_forms { rule.forms[i].eval(&kin.dv) } else { Vector3::zeros() };
+        let mut df_stack: [Vector3<f64>; MAX_FORMS] = if n_forms <= MAX_FORMS { std::array::from_fn(eval) } else { [Vector3::zeros(); MAX_FORMS] };
         let mut df_heap = Vec::new();
-        let df: &mut [Vector3<f64>] = if rule.forms.len() <= MAX_FORMS {
+        let df: &mut [Vector3<f64>] = if n_forms <= MAX_FORMS {
             &mut df_stack
         } else {
-            df_heap.resize(rule.forms.len(), Vector3::zeros());
+            df_heap.extend((0..n_forms).map(eval));
             &mut df_heap
         };
-        for (d, f) in df.iter_mut().zip(rule.forms.iter()) {
-            *d = f.eval(&kin.dv);
-        }
         // MITC4+: the membrane pairs, evaluated once for all levels.
         let tying = rule.membrane.as_ref();
         let mut mstate = tying.map(|m| MembraneState::new(m, &geom.tying, &rule.forms, &geom.forms, df, &kin, with_tangent));
@@ -387,6 +386,32 @@ impl<'a> ShellElement<'a> {
         // last with centre-sampled in-plane shear; all five rows per point without).
         const STACK: usize = 21;
         let mut rows: [Row; MAX_PAIRS] = [[0.0; ELEMENT_DOFS]; MAX_PAIRS];
+        // With resultants, the pair rows split by thickness, R(ζ) = R⁰ + ζR¹ + ζ²R²: with
+        // p = a_p + ζ b_p and q = a_q + ζ b_q, ∂(½ p·q) = ½(q·∂p + p·∂q) gives
+        // R⁰ = ½(q_a·∂a_p + p_a·∂a_q), R¹ = ½(q_b·∂a_p + q_a·∂b_p + p_b·∂a_q + p_a·∂b_q),
+        // R² = ½(q_b·∂b_p + p_b·∂b_q), built once for all levels.
+        let mut rows_split: Option<[[Row; 3]; MAX_PAIRS]> = None;
+        if let (Some(split), true) = (resultants, with_tangent) {
+            let rs = rows_split.insert([[[0.0; ELEMENT_DOFS]; 3]; MAX_PAIRS]);
+            let value = |f: Option<usize>| f.map_or(Vector3::zeros(), |f| geom.forms[f] + df[f]);
+            let chain = |f: Option<usize>, y: Vector3<f64>, out: &mut Row| {
+                if let Some(f) = f {
+                    kin.chain_form(&rule.forms[f], &y, out);
+                }
+            };
+            for (r, &[ap, bp, aq, bq]) in rs.iter_mut().zip(split) {
+                let (pa, pb, qa, qb) = (value(ap) * 0.5, value(bp) * 0.5, value(aq) * 0.5, value(bq) * 0.5);
+                let [r0, r1, r2] = r;
+                chain(ap, qa, r0);
+                chain(aq, pa, r0);
+                chain(ap, qb, r1);
+                chain(bp, qa, r1);
+                chain(aq, pb, r1);
+                chain(bq, pa, r1);
+                chain(bp, qb, r2);
+                chain(bq, pb, r2);
+            }
+        }
         let mut b_stack: [Row; STACK] = [[0.0; ELEMENT_DOFS]; STACK];
         let mut db_stack: [Row; STACK] = [[0.0; ELEMENT_DOFS]; STACK];
         for (level, centre_geom) in rule.levels.iter().zip(geom.centres.iter()) {
@@ -399,7 +424,14 @@ impl<'a> ShellElement<'a> {
                 *et = 0.5 * (pr.dot(&dq) + dp.dot(&qr) + dp.dot(&dq));
             }
             // DOF-space rows of the pairs: ∂(½ p·q)/∂DOF.
-            if with_tangent {
+            if let (Some(rs), true) = (&rows_split, with_tangent) {
+                let (z, z2) = (level.zeta, level.zeta * level.zeta);
+                for (row, [r0, r1, r2]) in rows.iter_mut().zip(rs).take(pairs.len()) {
+                    for (j, x) in row.iter_mut().enumerate() {
+                        *x = r0[j] + z * r1[j] + z2 * r2[j];
+                    }
+                }
+            } else if with_tangent {
                 for (row, &(p, q)) in rows.iter_mut().zip(pairs) {
                     *row = [0.0; ELEMENT_DOFS];
                     if p == q {

@@ -228,6 +228,7 @@ mod tests {
 
     use nalgebra::Vector3;
 
+    use super::super::rule::MAX_FORMS;
     use super::super::mixed::{extrapolate, point_count, unknown_change, Mixed, PointRecord};
     use super::super::shell4::tests::{apply, frames, geometry, section_of};
     use super::super::shell4::{ElemVec, Section, SectionRule, ShearTreatment, ShellElement};
@@ -253,6 +254,7 @@ mod tests {
                 let el = ShellElement { x0, d0, grain: None, section: sec };
                 let rule = SectionRule::new(sec).unwrap();
                 assert!(rule.resultants.is_some(), "{name} {shear:?}: {} levels without resultants", rule.levels.len());
+                assert!(*name == "laminate" || rule.forms.len() <= MAX_FORMS, "{name} {shear:?}: {} forms take the heap scratch", rule.forms.len());
                 let plain = rule.clone().level_by_level();
                 let geom = el.geometry(&rule).unwrap();
                 let mut u = ElemVec::zeros();
