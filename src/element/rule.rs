@@ -21,17 +21,19 @@ use super::quadrature::gauss_legendre;
 use super::shell4::{ElementFailure, Section, ShearTreatment, ShellElement};
 
 /// Largest number of distinct base-vector forms of a rule kept in the kernel's stack
-/// scratch (the forms of up to 5 thickness levels, with the split forms of their resultants
-/// and the MITC4+ mid-surface forms: `resultant_forces_equal_the_level_by_level_sums` checks
-/// that they fit; laminate rules with more levels use heap scratch) and of distinct pair
-/// strains of one thickness level (MITC4: 15).
-pub(super) const MAX_FORMS: usize = 88;
+/// scratch (5 thickness levels of MITC4 need 54, MITC4+ at most 10 more mid-surface forms;
+/// laminate rules with more levels use heap scratch) and of distinct pair strains of one
+/// thickness level (MITC4: 15).
+pub(super) const MAX_FORMS: usize = 64 + 8;
 /// See [`MAX_FORMS`].
 pub(super) const MAX_PAIRS: usize = 16;
 /// Fewest thickness levels for which the kernel sums the pair stresses through the thickness
-/// into resultants before forming the internal force and the geometric stiffness
-/// ([`SectionRule::resultants`]): with two levels both orders cost the same.
-pub(super) const RESULTANT_LEVELS: usize = 3;
+/// into resultants before forming the internal force, the pair rows and the geometric
+/// stiffness ([`SectionRule::resultants`]). Their fixed cost is that of a few levels:
+/// measured (`examples/assembly_speed.rs --kernel`, shared machine) the 3-level fabric
+/// section's tangent took about 8 % longer with resultants (longer still with the split pair
+/// rows), the 9-level suit laminate's about 15 % less; only laminates reach six levels.
+pub(super) const RESULTANT_LEVELS: usize = 6;
 
 /// A pair strain of a level split by thickness: its forms p = a_p + ζ b_p and q = a_q + ζ b_q
 /// as rule form indices [a_p, b_p, a_q, b_q] (None: an empty form, b of g_ζ).

@@ -346,16 +346,17 @@ impl<'a> ShellElement<'a> {
         let with_tangent = TANGENT && k.is_some();
         // Changes Δp of the rule's forms.
         // (Stack scratch, or heap scratch for the long rules of many-ply laminates.)
-        let n_forms = rule.forms.len();
-        let eval = |i: usize| if i < n_forms { rule.forms[i].eval(&kin.dv) } else { Vector3::zeros() };
-        let mut df_stack: [Vector3<f64>; MAX_FORMS] = if n_forms <= MAX_FORMS { std::array::from_fn(eval) } else { [Vector3::zeros(); MAX_FORMS] };
+        let mut df_stack = [Vector3::zeros(); MAX_FORMS];
         let mut df_heap = Vec::new();
-        let df: &mut [Vector3<f64>] = if n_forms <= MAX_FORMS {
+        let df: &mut [Vector3<f64>] = if rule.forms.len() <= MAX_FORMS {
             &mut df_stack
         } else {
-            df_heap.extend((0..n_forms).map(eval));
+            df_heap.resize(rule.forms.len(), Vector3::zeros());
             &mut df_heap
         };
+        for (d, f) in df.iter_mut().zip(rule.forms.iter()) {
+            *d = f.eval(&kin.dv);
+        }
         // MITC4+: the membrane pairs, evaluated once for all levels.
         let tying = rule.membrane.as_ref();
         let mut mstate = tying.map(|m| MembraneState::new(m, &geom.tying, &rule.forms, &geom.forms, df, &kin, with_tangent));
