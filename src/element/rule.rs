@@ -28,11 +28,11 @@ pub(super) const MAX_FORMS: usize = 64 + 8;
 /// See [`MAX_FORMS`].
 pub(super) const MAX_PAIRS: usize = 16;
 /// Fewest thickness levels for which the kernel sums the pair stresses through the thickness
-/// into resultants before forming the internal force, the pair rows and the geometric
-/// stiffness ([`SectionRule::resultants`]). Their fixed cost is that of a few levels:
-/// measured (`examples/assembly_speed.rs --kernel`, shared machine) the 3-level fabric
-/// section's tangent took about 8 % longer with resultants (longer still with the split pair
-/// rows), the 9-level suit laminate's about 15 % less; only laminates reach six levels.
+/// into resultants before forming the internal force and the geometric stiffness
+/// ([`SectionRule::resultants`]). Their fixed cost is that of a few levels: measured
+/// (`examples/assembly_speed.rs --kernel`, shared machine) the 3-level fabric section's
+/// tangent took about 8 % longer with resultants, the 9-level suit laminate's about 14 %
+/// less; only laminates reach six levels.
 pub(super) const RESULTANT_LEVELS: usize = 6;
 
 /// A pair strain of a level split by thickness: its forms p = a_p + ζ b_p and q = a_q + ζ b_q

@@ -292,30 +292,18 @@ impl<'a> ShellElement<'a> {
         k: Option<&mut ElemMat>,
         mixed: Option<Mixed<'_>>,
     ) -> Result<(ElemVec, f64), ElementFailure> {
-        // The kernel is compiled once with and once without the tangent, so that the
-        // residual-only path carries none of the tangent's scratch.
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx2") {
             // SAFETY: the CPU supports AVX2, the only requirement of `response_avx2`.
-            return unsafe {
-                if k.is_some() {
-                    self.response_avx2::<true>(rule, geom, u, frames, k, mixed)
-                } else {
-                    self.response_avx2::<false>(rule, geom, u, frames, k, mixed)
-                }
-            };
+            return unsafe { self.response_avx2(rule, geom, u, frames, k, mixed) };
         }
-        if k.is_some() {
-            self.response_kernel::<true>(rule, geom, u, frames, k, mixed)
-        } else {
-            self.response_kernel::<false>(rule, geom, u, frames, k, mixed)
-        }
+        self.response_kernel(rule, geom, u, frames, k, mixed)
     }
 
     /// `response_kernel` compiled for AVX2.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    fn response_avx2<const TANGENT: bool>(
+    fn response_avx2(
         &self,
         rule: &SectionRule,
         geom: &ElementGeometry,
@@ -324,12 +312,12 @@ impl<'a> ShellElement<'a> {
         k: Option<&mut ElemMat>,
         mixed: Option<Mixed<'_>>,
     ) -> Result<(ElemVec, f64), ElementFailure> {
-        self.response_kernel::<TANGENT>(rule, geom, u, frames, k, mixed)
+        self.response_kernel(rule, geom, u, frames, k, mixed)
     }
 
-    /// The body of `response_into`; `TANGENT` is `k.is_some()`.
+    /// The body of `response_into`.
     #[inline(always)]
-    fn response_kernel<const TANGENT: bool>(
+    fn response_kernel(
         &self,
         rule: &SectionRule,
         geom: &ElementGeometry,
@@ -343,7 +331,7 @@ impl<'a> ShellElement<'a> {
         }
         let kin = Kinematics::new(&geom.r, &geom.phi0, u, frames)?;
         let material = &*self.section.material;
-        let with_tangent = TANGENT && k.is_some();
+        let with_tangent = k.is_some();
         // Changes Δp of the rule's forms.
         // (Stack scratch, or heap scratch for the long rules of many-ply laminates.)
         let mut df_stack = [Vector3::zeros(); MAX_FORMS];
@@ -387,52 +375,18 @@ impl<'a> ShellElement<'a> {
         // last with centre-sampled in-plane shear; all five rows per point without).
         const STACK: usize = 21;
         let mut rows: [Row; MAX_PAIRS] = [[0.0; ELEMENT_DOFS]; MAX_PAIRS];
-        // With resultants, the pair rows split by thickness, R(ζ) = R⁰ + ζR¹ + ζ²R²: with
-        // p = a_p + ζ b_p and q = a_q + ζ b_q, ∂(½ p·q) = ½(q·∂p + p·∂q) gives
-        // R⁰ = ½(q_a·∂a_p + p_a·∂a_q), R¹ = ½(q_b·∂a_p + q_a·∂b_p + p_b·∂a_q + p_a·∂b_q),
-        // R² = ½(q_b·∂b_p + p_b·∂b_q), built once for all levels.
-        let mut rows_split: Option<[[Row; 3]; MAX_PAIRS]> = None;
-        if let (Some(split), true) = (resultants, with_tangent) {
-            let rs = rows_split.insert([[[0.0; ELEMENT_DOFS]; 3]; MAX_PAIRS]);
-            let value = |f: Option<usize>| f.map_or(Vector3::zeros(), |f| geom.forms[f] + df[f]);
-            let chain = |f: Option<usize>, y: Vector3<f64>, out: &mut Row| {
-                if let Some(f) = f {
-                    kin.chain_form(&rule.forms[f], &y, out);
-                }
-            };
-            for (r, &[ap, bp, aq, bq]) in rs.iter_mut().zip(split) {
-                let (pa, pb, qa, qb) = (value(ap) * 0.5, value(bp) * 0.5, value(aq) * 0.5, value(bq) * 0.5);
-                let [r0, r1, r2] = r;
-                chain(ap, qa, r0);
-                chain(aq, pa, r0);
-                chain(ap, qb, r1);
-                chain(bp, qa, r1);
-                chain(aq, pb, r1);
-                chain(bq, pa, r1);
-                chain(bp, qb, r2);
-                chain(bq, pb, r2);
-            }
-        }
         let mut b_stack: [Row; STACK] = [[0.0; ELEMENT_DOFS]; STACK];
         let mut db_stack: [Row; STACK] = [[0.0; ELEMENT_DOFS]; STACK];
         for (level, centre_geom) in rule.levels.iter().zip(geom.centres.iter()) {
             let pairs = &level.pairs;
-            let (forms0, df) = (&geom.forms[..], &df[..]);
-            let current = |f: usize| forms0[f] + df[f];
+            let current = |f: usize| geom.forms[f] + df[f];
             let mut e = [0.0; MAX_PAIRS];
             for (et, &(p, q)) in e.iter_mut().zip(pairs) {
                 let (pr, dp, qr, dq) = (geom.forms[p], df[p], geom.forms[q], df[q]);
                 *et = 0.5 * (pr.dot(&dq) + dp.dot(&qr) + dp.dot(&dq));
             }
             // DOF-space rows of the pairs: ∂(½ p·q)/∂DOF.
-            if let (Some(rs), true) = (&rows_split, with_tangent) {
-                let (z, z2) = (level.zeta, level.zeta * level.zeta);
-                for (row, [r0, r1, r2]) in rows.iter_mut().zip(rs).take(pairs.len()) {
-                    for (j, x) in row.iter_mut().enumerate() {
-                        *x = r0[j] + z * r1[j] + z2 * r2[j];
-                    }
-                }
-            } else if with_tangent {
+            if with_tangent {
                 for (row, &(p, q)) in rows.iter_mut().zip(pairs) {
                     *row = [0.0; ELEMENT_DOFS];
                     if p == q {
@@ -576,10 +530,10 @@ impl<'a> ShellElement<'a> {
                     }
                 }
             } else if geo.is_some() {
-                add_pair_forces(&sigma, pairs, &rule.forms, forms0, df, &mut fv, None);
-                add_pair_forces(&sigma_geo, pairs, &rule.forms, forms0, df, &mut fv_geo, Some(&mut x));
+                add_pair_forces(&sigma, pairs, &rule.forms, current, &mut fv, None);
+                add_pair_forces(&sigma_geo, pairs, &rule.forms, current, &mut fv_geo, Some(&mut x));
             } else {
-                add_pair_forces(&sigma, pairs, &rule.forms, forms0, df, &mut fv, with_tangent.then_some(&mut x));
+                add_pair_forces(&sigma, pairs, &rule.forms, current, &mut fv, with_tangent.then_some(&mut x));
             }
         }
         if let Some(split) = resultants {
@@ -591,7 +545,8 @@ impl<'a> ShellElement<'a> {
             }
         }
         if let (Some(m), Some(ms)) = (tying, &mstate) {
-            add_pair_forces(&ms.sigma, &m.pairs, &rule.forms, &geom.forms, df, &mut fv, with_tangent.then_some(&mut x));
+            let current = |f: usize| geom.forms[f] + df[f];
+            add_pair_forces(&ms.sigma, &m.pairs, &rule.forms, current, &mut fv, with_tangent.then_some(&mut x));
         }
         let feff = kin.director_chain(&fv);
         let mut force = ElemVec::zeros();

@@ -58,17 +58,17 @@ pub(super) fn mirror_into(u: &Upper, k: &mut ElemMat) {
 }
 
 /// Adds the gradients σ ∂(½ p·q)/∂V_i = ½σ (c^p_i q + c^q_i p) of the pair strains (form
-/// indices `pairs`, stress weights `sigma`, current form values `forms0` + `df`) to the
-/// generalised forces `fv` and, when `x` is given, their second derivatives to `x`.
+/// indices `pairs`, stress weights `sigma`, current form values `current`) to the generalised
+/// forces `fv` and, when `x` is given, their second derivatives to `x`.
 #[inline(always)]
-pub(super) fn add_pair_forces(sigma: &[f64], pairs: &[(usize, usize)], forms: &[Lin], forms0: &[Vector3<f64>], df: &[Vector3<f64>], fv: &mut [Vector3<f64>; NV], mut x: Option<&mut [[f64; NV]; NV]>) {
+pub(super) fn add_pair_forces(sigma: &[f64], pairs: &[(usize, usize)], forms: &[Lin], current: impl Fn(usize) -> Vector3<f64>, fv: &mut [Vector3<f64>; NV], mut x: Option<&mut [[f64; NV]; NV]>) {
     for (&sg, &(p, q)) in sigma.iter().zip(pairs) {
         if sg == 0.0 {
             continue;
         }
         let (lp, lq) = (&forms[p], &forms[q]);
         let half = 0.5 * sg;
-        let (pc, qc) = (forms0[p] + df[p], forms0[q] + df[q]);
+        let (pc, qc) = (current(p), current(q));
         for (i, ci) in lp.terms() {
             fv[i] += qc * (half * ci);
         }
