@@ -31,8 +31,8 @@ pub(super) const MAX_PAIRS: usize = 16;
 /// into resultants before forming the internal force and the geometric stiffness
 /// ([`SectionRule::resultants`]). Their fixed cost is that of a few levels: measured
 /// (`examples/assembly_speed.rs --kernel`, shared machine) the 3-level fabric section's
-/// tangent took about 8 % longer with resultants, the 9-level suit laminate's about 14 %
-/// less; only laminates reach six levels.
+/// tangent took about 8 % longer with resultants, the 9-level suit laminate's 6–14 % less
+/// (residual 10–25 % less); only laminates reach six levels.
 pub(super) const RESULTANT_LEVELS: usize = 6;
 
 /// A pair strain of a level split by thickness: its forms p = a_p + ζ b_p and q = a_q + ζ b_q
