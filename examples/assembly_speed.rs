@@ -2,7 +2,7 @@
 //!
 //! `cargo run --release --example assembly_speed -- --kernel [ELEMENTS] [REPEATS]`:
 //! microseconds per element per tangent and per residual (force + energy) of the 4-node
-//! shell, one thread, for St. Venant–Kirchhoff, Ciarlet neo-Hookean and fabric laminae and the
+//! shell, on one thread (thread CPU time) and on a pool of two (wall time), for St. Venant–Kirchhoff, Ciarlet neo-Hookean and fabric laminae and the
 //! three-ply fabric laminate section of the NBC suit (nine thickness levels), with
 //! MITC4, SRI and both MITC4+ variants, on a patch of distorted, warped, strongly deformed elements (median
 //! of REPEATS passes). Prints checksums of forces, energies and tangents, so that a change
@@ -22,6 +22,7 @@ use nalgebra::Vector3;
 use plyshell::assembly::Assembler;
 use plyshell::element::{DirectorFrame, ElementGeometry, Section, SectionRule, ShearTreatment, ShellElement};
 use plyshell::material::{twist_default, Fabric, FabricProperties, LaminaPly, Laminate, NeoHookean, ShellMaterial, StVenantKirchhoff};
+use rayon::prelude::*;
 
 /// CPU time of the calling thread in seconds (Linux `CLOCK_THREAD_CPUTIME_ID`, exact to the
 /// nanosecond and blind to time the thread spends preempted, so single-thread kernel timings
@@ -150,8 +151,8 @@ fn kernel(n: usize, repeats: usize) -> Result<(), String> {
         ("fabric", Arc::new(Fabric::new(fabric)), h_fabric, 3, 0.02),
         ("laminate", Arc::new(laminate), h_laminate, 2, 0.1),
     ];
-    println!("kernel: {} elements, 1 thread, {repeats} passes: fastest pass (median) in µs of thread CPU time per element", n * n);
-    println!("{:<12} {:<9} {:>16} {:>16}   checksums (Σ|f|, Σ energy, Σ|K|)", "material", "shear", "tangent", "residual");
+    println!("kernel: {} elements, {repeats} passes: fastest pass (median) in µs per element; 1 thread: thread CPU time, 2 threads: wall time", n * n);
+    println!("{:<12} {:<15} {:>16} {:>16} {:>16} {:>16}   checksums (Σ|f|, Σ energy, Σ|K|)", "material", "shear", "tangent 1t", "residual 1t", "tangent 2t", "residual 2t");
     // KERNEL_MATERIAL=SVK (or neo-Hookean, fabric, laminate) times one material only (for profiling).
     let only = std::env::var("KERNEL_MATERIAL").ok();
     for (name, material, h, tp, size) in materials {
@@ -179,6 +180,26 @@ fn kernel(n: usize, repeats: usize) -> Result<(), String> {
                     std::hint::black_box(energy);
                 }
             }
+            // Two threads: the patch split between a pool of two (wall time per element).
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().map_err(|e| e.to_string())?;
+            let mut times2 = [Vec::new(), Vec::new()];
+            for with_tangent in [true, false] {
+                for pass in 0..repeats + 1 {
+                    let t = Instant::now();
+                    let energy: Result<f64, String> = pool.install(|| {
+                        (0..n * n)
+                            .into_par_iter()
+                            .with_min_len(64)
+                            .map(|e| elements[e].response_with(&rule, &geoms[e], &p.u[e], &p.frames[e], with_tangent).map(|o| o.energy).map_err(|e| e.to_string()))
+                            .sum()
+                    });
+                    let us = t.elapsed().as_secs_f64() * 1e6 / (n * n) as f64;
+                    if pass > 0 {
+                        times2[usize::from(!with_tangent)].push(us);
+                    }
+                    std::hint::black_box(energy?);
+                }
+            }
             // Checksums (untimed); the residual-only path must give the same force and energy.
             let mut sums = (0.0, 0.0, 0.0);
             for e in 0..n * n {
@@ -193,11 +214,13 @@ fn kernel(n: usize, repeats: usize) -> Result<(), String> {
             }
             let cell = |t: &Vec<f64>| format!("{:.3} ({:.3})", minimum(t), median(t.clone()));
             println!(
-                "{:<12} {:<9} {:>16} {:>16}   {:.15e} {:.15e} {:.15e}",
+                "{:<12} {:<15} {:>16} {:>16} {:>16} {:>16}   {:.15e} {:.15e} {:.15e}",
                 name,
                 format!("{shear:?}"),
                 cell(&times[0]),
                 cell(&times[1]),
+                cell(&times2[0]),
+                cell(&times2[1]),
                 sums.0,
                 sums.1,
                 sums.2

@@ -102,6 +102,11 @@ impl Lin {
         }
     }
 
+    /// Whether the form has no terms.
+    pub(super) fn is_empty(&self) -> bool {
+        self.n == 0
+    }
+
     /// The (index, coefficient) terms.
     #[inline(always)]
     pub(super) fn terms(&self) -> impl Iterator<Item = (usize, f64)> + '_ {
@@ -140,6 +145,22 @@ pub(super) fn base_forms(xi: f64, eta: f64, zeta: f64, h: f64) -> [Lin; 3] {
         g[2].push(VD + a, 0.5 * h * n[a]);
     }
     g
+}
+
+/// The base-vector forms of (ξ, η) split by their dependence on the thickness coordinate:
+/// g(ζ) = a + ζ b with a = `base_forms(ξ, η, 0, h)` (positions in g_ξ, g_η; directors in
+/// g_ζ) and b the edge-gradient part of g_ξ, g_η at ζ = 1 (empty for g_ζ). Returns [a, b].
+pub(super) fn base_forms_split(xi: f64, eta: f64, h: f64) -> [[Lin; 3]; 2] {
+    let a = base_forms(xi, eta, 0.0, h);
+    let full = base_forms(xi, eta, 1.0, h);
+    let b = full.map(|g| {
+        let mut out = Lin::default();
+        for (i, c) in g.terms().filter(|&(i, _)| i >= VE) {
+            out.push(i, c);
+        }
+        out
+    });
+    [a, b]
 }
 
 /// The kinematic vectors of one element state: their changes V_i − V⁰_i from the reference,

@@ -15,7 +15,7 @@
 
 use nalgebra::{Matrix3, SMatrix, Vector3};
 
-use super::kinematics::{base_forms, edge_gradient, Lin, EDGES, NV, VD, VE};
+use super::kinematics::{base_forms, base_forms_split, edge_gradient, Lin, EDGES, NV, VD, VE};
 use super::membrane::{MembraneTying, TyingWeights, MAX_MPAIRS};
 use super::quadrature::gauss_legendre;
 use super::shell4::{ElementFailure, Section, ShearTreatment, ShellElement};
@@ -27,6 +27,17 @@ use super::shell4::{ElementFailure, Section, ShearTreatment, ShellElement};
 pub(super) const MAX_FORMS: usize = 64 + 8;
 /// See [`MAX_FORMS`].
 pub(super) const MAX_PAIRS: usize = 16;
+/// Fewest thickness levels for which the kernel sums the pair stresses through the thickness
+/// into resultants before forming the internal force and the geometric stiffness
+/// ([`SectionRule::resultants`]). Their fixed cost is that of a few levels: measured
+/// (`examples/assembly_speed.rs --kernel`, shared machine) the 3-level fabric section's
+/// tangent took about 8 % longer with resultants, the 9-level suit laminate's 6–14 % less
+/// (residual 10–25 % less); only laminates reach six levels.
+pub(super) const RESULTANT_LEVELS: usize = 6;
+
+/// A pair strain of a level split by thickness: its forms p = a_p + ζ b_p and q = a_q + ζ b_q
+/// as rule form indices [a_p, b_p, a_q, b_q] (None: an empty form, b of g_ζ).
+pub(super) type SplitPair = [Option<usize>; 4];
 
 /// A natural strain component at a point: Σ w_t (pair strain t of the level), one or two terms.
 #[derive(Clone, Copy, Debug, Default)]
@@ -70,6 +81,9 @@ pub(super) struct Level {
     pub points: Vec<RulePoint>,
     /// Element centre at this level.
     pub centre: RulePoint,
+    /// The pairs' forms split by thickness, [a_p, b_p, a_q, b_q] with p = a_p + ζ b_p (see
+    /// [`SectionRule::resultants`]).
+    splits: Vec<[Lin; 4]>,
 }
 
 /// Integration rule of a section: 2×2 points in the plane times the thickness rule, each with
@@ -86,12 +100,26 @@ pub struct SectionRule {
     /// Whether the lamina's in-plane shear 2E12 is sampled at the element centre (else at
     /// each point, from the point's own natural strains).
     pub(super) centre_shear: bool,
+    /// Through-thickness resultants of the pair strains, for rules of at least
+    /// [`RESULTANT_LEVELS`] levels whose levels have the same pairs in the same order (always,
+    /// for the rules built here): pair t of every level is ½(p·q − P·Q) with
+    /// p = a_p + ζ b_p, q = a_q + ζ b_q, the split forms being common to all levels. The
+    /// kernel then sums the pairs' stress weights σ_t(ζ) over the levels into
+    /// S_t^n = Σ σ_t ζⁿ (n = 0, 1, 2) and forms the internal force
+    /// Σ_ζ σ ∂(½ p·q) = ½[a_p ⊗ (S⁰q_a + S¹q_b) + b_p ⊗ (S¹q_a + S²q_b) + (p ↔ q)] and the
+    /// second-derivative matrix ½[S⁰ a_p⊗a_q + S¹(a_p⊗b_q + b_p⊗a_q) + S² b_p⊗b_q] once per
+    /// pair instead of once per pair and level — the stress resultants (N, M and the
+    /// quadratic moment) of a degenerated shell with straight fibres (Hughes 2000, ch. 6;
+    /// the same sums in a different order, so equal to rounding).
+    pub(super) resultants: Option<Vec<SplitPair>>,
 }
 
 /// Builder state: the distinct forms and the pairs of the current level.
 struct Tables {
     forms: Vec<Lin>,
     pairs: Vec<(usize, usize)>,
+    /// The split forms [a_p, b_p, a_q, b_q] of the current level's pairs.
+    splits: Vec<[Lin; 4]>,
 }
 
 impl Tables {
@@ -102,10 +130,13 @@ impl Tables {
         })
     }
 
-    fn pair(&mut self, p: Lin, q: Lin) -> usize {
+    /// The index of pair ½(p·q − P·Q) in the current level, with its forms split by
+    /// thickness, `sp` = [a_p, b_p] and `sq` = [a_q, b_q].
+    fn pair(&mut self, p: Lin, q: Lin, sp: [Lin; 2], sq: [Lin; 2]) -> usize {
         let key = (self.form(p), self.form(q));
         self.pairs.iter().position(|f| *f == key).unwrap_or_else(|| {
             self.pairs.push(key);
+            self.splits.push([sp[0], sp[1], sq[0], sq[1]]);
             self.pairs.len() - 1
         })
     }
@@ -113,14 +144,16 @@ impl Tables {
     /// Strain terms at (ξ, η, ζ) with weight `w` for thickness `h` and shear treatment `shear`.
     fn point(&mut self, xi: f64, eta: f64, zeta: f64, w: f64, h: f64, shear: ShearTreatment) -> RulePoint {
         let g = base_forms(xi, eta, zeta, h);
-        let mut one = |p: Lin, q: Lin| Comp { n: 1, pair: [self.pair(p, q), 0], w: [1.0, 0.0] };
-        let (cxx, cyy, cxy) = (one(g[0], g[0]), one(g[1], g[1]), one(g[0], g[1]));
+        let [ga, gb] = base_forms_split(xi, eta, h);
+        let mut one = |i: usize, j: usize| Comp { n: 1, pair: [self.pair(g[i], g[j], [ga[i], gb[i]], [ga[j], gb[j]]), 0], w: [1.0, 0.0] };
+        let (cxx, cyy, cxy) = (one(0, 0), one(1, 1), one(0, 1));
         let mut tied = |pts: [(f64, f64, f64); 2], comp: usize| {
             let mut out = Comp::default();
             for &(xt, yt, wt) in &pts {
                 if wt != 0.0 {
                     let gt = base_forms(xt, yt, zeta, h);
-                    out.pair[out.n] = self.pair(gt[comp], gt[2]);
+                    let [ta, tb] = base_forms_split(xt, yt, h);
+                    out.pair[out.n] = self.pair(gt[comp], gt[2], [ta[comp], tb[comp]], [ta[2], tb[2]]);
                     out.w[out.n] = wt;
                     out.n += 1;
                 }
@@ -139,7 +172,7 @@ impl Tables {
 
     /// Closes the current level.
     fn level(&mut self, zeta: f64, points: Vec<RulePoint>, centre: RulePoint) -> Level {
-        Level { zeta, pairs: std::mem::take(&mut self.pairs), points, centre }
+        Level { zeta, pairs: std::mem::take(&mut self.pairs), points, centre, splits: std::mem::take(&mut self.splits) }
     }
 }
 
@@ -164,7 +197,7 @@ impl SectionRule {
             }
         };
         let (p2, _) = gauss_legendre(2).ok_or(ElementFailure::ThicknessRule(2))?;
-        let mut t = Tables { forms: Vec::new(), pairs: Vec::new() };
+        let mut t = Tables { forms: Vec::new(), pairs: Vec::new(), splits: Vec::new() };
         let mut levels = Vec::with_capacity(through.len());
         let (h, shear) = (section.thickness, section.shear);
         let mut plane = Vec::with_capacity(5);
@@ -180,16 +213,26 @@ impl SectionRule {
         }
         plane.push((0.0, 0.0));
         let membrane = shear.assumed_membrane().then(|| MembraneTying::new(&plane, &mut |l| t.form(l)));
-        Ok(Self { forms: t.forms, levels, membrane, centre_shear: centre_shear(shear) })
+        let resultants = (levels.len() >= RESULTANT_LEVELS && levels.iter().all(|l| l.splits == levels[0].splits))
+            .then(|| levels[0].splits.iter().map(|s| s.map(|f| (!f.is_empty()).then(|| t.form(f)))).collect());
+        Ok(Self { forms: t.forms, levels, membrane, centre_shear: centre_shear(shear), resultants })
     }
 
     /// The rule of the mid-surface centre alone (ξ = η = ζ = 0), for output.
     pub(super) fn centre(h: f64, shear: ShearTreatment) -> Self {
-        let mut t = Tables { forms: Vec::new(), pairs: Vec::new() };
+        let mut t = Tables { forms: Vec::new(), pairs: Vec::new(), splits: Vec::new() };
         let centre = t.point(0.0, 0.0, 0.0, 1.0, h, shear);
         let level = t.level(0.0, Vec::new(), centre);
         let membrane = shear.assumed_membrane().then(|| MembraneTying::new(&[(0.0, 0.0)], &mut |l| t.form(l)));
-        Self { forms: t.forms, levels: vec![level], membrane, centre_shear: centre_shear(shear) }
+        Self { forms: t.forms, levels: vec![level], membrane, centre_shear: centre_shear(shear), resultants: None }
+    }
+
+    /// The same rule evaluated level by level, without resultants (for tests comparing the
+    /// two orders of summation).
+    #[cfg(test)]
+    pub(super) fn level_by_level(mut self) -> Self {
+        self.resultants = None;
+        self
     }
 
     /// Whether the rule fits the element kernel's fixed-size scratch: per level at most

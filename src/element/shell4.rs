@@ -57,13 +57,13 @@ use nalgebra::{SMatrix, SVector, Vector3};
 use serde::{Deserialize, Serialize};
 
 use super::director::DirectorFrame;
-use super::kinematics::{Kinematics, Lin, NV};
+use super::kinematics::{Kinematics, NV};
 use super::membrane::MembraneState;
 use super::mixed::{point_count, Mixed};
 use super::quadrature::{bilinear, gauss_legendre};
 use super::rule::{Comp, RulePoint, MAX_FORMS, MAX_PAIRS};
 pub use super::rule::{ElementGeometry, SectionRule};
-use super::tangent::{add_geometric_tangent, add_pair_second_derivative, add_upper_btc, mirror_into, symmetric_part, Row, Upper};
+use super::tangent::{add_geometric_tangent, add_pair_forces, add_resultant_forces, add_upper_btc, mirror_into, symmetric_part, Row, Upper};
 use super::ELEMENT_DOFS;
 use crate::material::{MaterialFailure, ShellMaterial, Voigt5};
 
@@ -217,30 +217,6 @@ fn add_pair_stress(comps: &[Comp; 5], sn: &Voigt5, sigma: &mut [f64; MAX_PAIRS])
     }
 }
 
-/// Adds the gradients σ ∂(½ p·q)/∂V_i = ½σ (c^p_i q + c^q_i p) of the pair strains (form
-/// indices `pairs`, stress weights `sigma`, current form values `current`) to the generalised
-/// forces `fv` and, when `x` is given, their second derivatives to `x`.
-#[inline(always)]
-fn add_pair_forces(sigma: &[f64], pairs: &[(usize, usize)], forms: &[Lin], current: impl Fn(usize) -> Vector3<f64>, fv: &mut [Vector3<f64>; NV], mut x: Option<&mut [[f64; NV]; NV]>) {
-    for (&sg, &(p, q)) in sigma.iter().zip(pairs) {
-        if sg == 0.0 {
-            continue;
-        }
-        let (lp, lq) = (&forms[p], &forms[q]);
-        let half = 0.5 * sg;
-        let (pc, qc) = (current(p), current(q));
-        for (i, ci) in lp.terms() {
-            fv[i] += qc * (half * ci);
-        }
-        for (i, ci) in lq.terms() {
-            fv[i] += pc * (half * ci);
-        }
-        if let Some(x) = x.as_deref_mut() {
-            add_pair_second_derivative(x, lp, lq, sg);
-        }
-    }
-}
-
 impl<'a> ShellElement<'a> {
     /// Internal force, tangent (if `with_tangent`) and energy in the configuration given by
     /// nodal displacements `u` and current director frames `frames`. Builds the section rule
@@ -389,6 +365,11 @@ impl<'a> ShellElement<'a> {
         let mut fv = [Vector3::zeros(); NV];
         let mut x = [[0.0; NV]; NV];
         let mut first_point = 0;
+        // Through-thickness resultants [Σσ, Σσζ, Σσζ²] of the level pairs' stress weights
+        // (current and, with mixed stresses, extrapolated), when the rule has them.
+        let resultants = rule.resultants.as_deref();
+        let mut s_res = [[0.0; 3]; MAX_PAIRS];
+        let mut s_res_geo = [[0.0; 3]; MAX_PAIRS];
         // Scratch of the tangent, reused level after level: the pairs' DOF-space rows and the
         // stacked rows of B and DB (per point E11, E22, 2E13, 2E23 and the level's 2E12 row
         // last with centre-sampled in-plane shear; all five rows per point without).
@@ -537,11 +518,30 @@ impl<'a> ShellElement<'a> {
             if with_tangent {
                 add_upper_btc(&mut upper, &b_stack[..n_rows], &db_stack[..n_rows]);
             }
-            if geo.is_some() {
+            if resultants.is_some() {
+                let z = level.zeta;
+                let zn = [1.0, z, z * z];
+                for (s, &sg) in s_res.iter_mut().zip(&sigma[..pairs.len()]) {
+                    s.iter_mut().zip(&zn).for_each(|(a, b)| *a += sg * b);
+                }
+                if geo.is_some() {
+                    for (s, &sg) in s_res_geo.iter_mut().zip(&sigma_geo[..pairs.len()]) {
+                        s.iter_mut().zip(&zn).for_each(|(a, b)| *a += sg * b);
+                    }
+                }
+            } else if geo.is_some() {
                 add_pair_forces(&sigma, pairs, &rule.forms, current, &mut fv, None);
                 add_pair_forces(&sigma_geo, pairs, &rule.forms, current, &mut fv_geo, Some(&mut x));
             } else {
                 add_pair_forces(&sigma, pairs, &rule.forms, current, &mut fv, with_tangent.then_some(&mut x));
+            }
+        }
+        if let Some(split) = resultants {
+            if geo.is_some() {
+                add_resultant_forces(&s_res, split, &rule.forms, &geom.forms, df, &mut fv, None);
+                add_resultant_forces(&s_res_geo, split, &rule.forms, &geom.forms, df, &mut fv_geo, Some(&mut x));
+            } else {
+                add_resultant_forces(&s_res, split, &rule.forms, &geom.forms, df, &mut fv, with_tangent.then_some(&mut x));
             }
         }
         if let (Some(m), Some(ms)) = (tying, &mstate) {
@@ -614,7 +614,7 @@ impl<'a> ShellElement<'a> {
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::*;
     use crate::element::kinematics::arc_factor;
     use crate::material::{Fabric, FabricProperties, LaminaPly, Laminate, NeoHookean, StVenantKirchhoff};
@@ -627,7 +627,7 @@ mod tests {
     /// A section of thickness 0.05 of the named lamina: "SVK", "neo-Hookean", "fabric"
     /// (the cotton broadcloth preset at that thickness, three thickness points) or
     /// "laminate" (a nonsymmetric stack of those three, 0.02 + 0.01 + 0.02).
-    fn section_of(shear: ShearTreatment, material: &str) -> Section {
+    pub(in crate::element) fn section_of(shear: ShearTreatment, material: &str) -> Section {
         let (material, thickness_points): (Arc<dyn ShellMaterial>, usize) = match material {
             "neo-Hookean" => (Arc::new(NeoHookean::new(1.0e4 / 3.0, 1.0e4 / 2.6)), 2),
             "fabric" => {
@@ -652,7 +652,7 @@ mod tests {
     }
 
     /// A distorted, slightly warped quad with non-parallel directors.
-    fn geometry() -> ([Vector3<f64>; 4], [Vector3<f64>; 4]) {
+    pub(in crate::element) fn geometry() -> ([Vector3<f64>; 4], [Vector3<f64>; 4]) {
         let x0 = [
             Vector3::new(0.0, 0.0, 0.0),
             Vector3::new(1.1, 0.1, 0.02),
@@ -668,12 +668,12 @@ mod tests {
         (x0, d0)
     }
 
-    fn frames(d: &[Vector3<f64>; 4]) -> [DirectorFrame; 4] {
+    pub(in crate::element) fn frames(d: &[Vector3<f64>; 4]) -> [DirectorFrame; 4] {
         std::array::from_fn(|a| DirectorFrame::new(d[a], Some(Vector3::x())))
     }
 
     /// Applies an element DOF increment (translations added, tilts by the exponential map).
-    fn apply(u: &[Vector3<f64>; 4], f: &[DirectorFrame; 4], du: &ElemVec) -> ([Vector3<f64>; 4], [DirectorFrame; 4]) {
+    pub(in crate::element) fn apply(u: &[Vector3<f64>; 4], f: &[DirectorFrame; 4], du: &ElemVec) -> ([Vector3<f64>; 4], [DirectorFrame; 4]) {
         let x2 = std::array::from_fn(|a| u[a] + Vector3::new(du[5 * a], du[5 * a + 1], du[5 * a + 2]));
         let f2 = std::array::from_fn(|a| f[a].tilted([du[5 * a + 3], du[5 * a + 4]]));
         (x2, f2)
