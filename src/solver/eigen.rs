@@ -23,29 +23,12 @@
 //! order its square). A single start vector sees one copy of a multiple eigenvalue.
 
 use nalgebra::{DMatrix, SymmetricEigen};
-use serde::Serialize;
 
 use super::linear::FactorKind;
 use super::newton::{IncrementReport, SolveError, Solver, StepPlan};
+pub use super::report::BucklingReport;
 use crate::element::NODE_DOFS;
 use crate::model::{Model, State, FIXED};
-
-/// Results of a linearized buckling analysis.
-#[derive(Clone, Debug, Default, Serialize)]
-pub struct BucklingReport {
-    /// Eigenvalues λ_i in ascending order: the critical scales are start + λ_i (target − start).
-    pub eigenvalues: Vec<f64>,
-    /// Critical load scales per mode (same order as the model's loads).
-    pub critical_scales: Vec<Vec<f64>>,
-    /// Relative residual ‖K_T φ + λ K_Δ φ‖ / ‖K_T φ‖ of each pair.
-    pub residuals: Vec<f64>,
-    /// Lanczos steps used.
-    pub iterations: usize,
-    /// Mode shapes over all DOFs (5 per node: translations, then tilts in the node's current
-    /// frame), scaled to a largest translation of 1.
-    #[serde(skip)]
-    pub modes: Vec<Vec<f64>>,
-}
 
 fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()

@@ -8,9 +8,12 @@ pub mod diagnose;
 pub mod dynamics;
 pub mod eigen;
 pub mod imperfection;
+mod inertia;
 pub mod linear;
 pub mod newton;
 pub mod nodal;
+mod report;
+mod saddle;
 
 pub use chord::ChordSettings;
 pub use dynamics::{DynamicInfo, DynamicSettings, LumpedMass, TimeScheme};

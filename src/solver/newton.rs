@@ -14,7 +14,7 @@ use serde::Serialize;
 use super::linear::{FactorKind, SparseCholesky};
 use super::{StepKind, SolverSettings};
 use crate::assembly::{Assembler, AssemblyFailure};
-use super::dynamics::DynamicInfo;
+pub use super::report::{IncrementReport, Progress, SolveError};
 use crate::element::NODE_DOFS;
 use crate::model::{Model, State, FIXED};
 
@@ -97,90 +97,6 @@ pub struct Timings {
     pub projected_iterations: usize,
 }
 
-/// A converged nominal increment.
-#[derive(Clone, Debug, Default, Serialize)]
-pub struct IncrementReport {
-    /// Step index.
-    pub step: usize,
-    /// Step name.
-    pub step_name: String,
-    /// Nominal increment within the step (1-based).
-    pub increment: usize,
-    /// Pseudo-time: step index + fraction of the step completed.
-    pub time: f64,
-    /// Load scales reached.
-    pub scales: Vec<f64>,
-    /// Newton iterations used since the previous report (all sub-increments).
-    pub iterations: usize,
-    /// Relative residual norms of the last sub-increment's iterations.
-    pub residuals: Vec<f64>,
-    /// Cut-backs since the previous report.
-    pub cutbacks: usize,
-    /// Whether any tangent in this increment was not positive definite.
-    pub indefinite_tangent: bool,
-    /// Strain energy.
-    pub energy: f64,
-    /// Reports of the extra contributions for this increment (e.g. contact active set).
-    #[serde(skip_serializing_if = "Vec::is_empty")]
-    pub extra: Vec<serde_json::Value>,
-    /// Load factor λ of a path-following step (scales = start + λ (target − start)).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub load_factor: Option<f64>,
-    /// Negative pivots of the tangent at the converged state (its number of negative
-    /// eigenvalues by Sylvester's law; 0 when LLᵀ succeeds).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub negative_pivots: Option<usize>,
-    /// Current stiffness parameter S_p = (f·K⁻¹f)₁ / (f·K⁻¹f) for the step's load change f,
-    /// 1 at the step's first increment (Bergan et al. 1978); its sign changes at a limit point.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub stiffness_parameter: Option<f64>,
-    /// "limit point" (negative-pivot count and sign of the stiffness parameter change),
-    /// "bifurcation" (count changes alone) or "displacement turning point" (sign alone,
-    /// a snap-back) when this increment crossed one.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub stability_event: Option<String>,
-    /// Linearized buckling results of a `Buckling` step.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub buckling: Option<super::BucklingReport>,
-    /// Time-integration data of a `Dynamic` step (None for static steps).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub dynamics: Option<DynamicInfo>,
-}
-
-/// Progress notification for a bar.
-#[derive(Clone, Debug)]
-pub struct Progress {
-    /// Step index.
-    pub step: usize,
-    /// Fraction of the whole analysis done.
-    pub fraction: f64,
-    /// Newton iteration in the current increment.
-    pub iteration: usize,
-    /// Current relative residual.
-    pub residual: f64,
-}
-
-/// Why a solve stopped.
-#[derive(Clone, Debug)]
-pub struct SolveError {
-    /// Step index.
-    pub step: usize,
-    /// Step name.
-    pub step_name: String,
-    /// Pseudo-time reached by the last converged state.
-    pub last_converged_time: f64,
-    /// Simulated time of the last accepted time step within a `Dynamic` step.
-    pub simulated_time: Option<f64>,
-    /// Newton iteration at failure.
-    pub iteration: usize,
-    /// Relative residual history of the last attempt.
-    pub residuals: Vec<f64>,
-    /// Element with the largest residual near the worst node, or the failing element.
-    pub worst_element: Option<usize>,
-    /// Diagnosis.
-    pub cause: String,
-}
-
 impl SolveError {
     /// The failure of a static increment of step `si` (`step`) whose last converged state is
     /// at fraction `tau` of the step: the failed attempt's iteration, residual history,
@@ -188,35 +104,6 @@ impl SolveError {
     pub(super) fn static_increment(si: usize, step: &StepPlan, tau: f64, iteration: usize, residuals: Vec<f64>, worst_element: Option<usize>, cause: String) -> Self {
         Self { step: si, step_name: step.name.clone(), last_converged_time: si as f64 + tau, simulated_time: None, iteration, residuals, worst_element, cause }
     }
-}
-
-impl std::fmt::Display for SolveError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        let at = match self.simulated_time {
-            Some(t) => format!("simulated time t = {t:.4e}"),
-            None => format!("time {:.6}", self.last_converged_time),
-        };
-        write!(
-            f,
-            "step {} '{}' failed after the last converged state at {}: {} (iteration {}, residual history [{}]",
-            self.step + 1,
-            self.step_name,
-            at,
-            self.cause,
-            self.iteration,
-            residual_history(&self.residuals)
-        )?;
-        match self.worst_element {
-            Some(e) => write!(f, "; worst element {e})"),
-            None => write!(f, ")"),
-        }
-    }
-}
-
-/// The residual history for a message: all of it, or the first 4 and last 10 values.
-fn residual_history(r: &[f64]) -> String {
-    let f = |v: &[f64]| v.iter().map(|x| format!("{x:.2e}")).collect::<Vec<_>>().join(", ");
-    if r.len() <= 16 { f(r) } else { format!("{}, … {} more …, {}", f(&r[..4]), r.len() - 14, f(&r[r.len() - 10..])) }
 }
 
 /// Outcome of one attempted increment.
