@@ -668,6 +668,20 @@ pub(super) mod tests {
         (x0, d0)
     }
 
+    /// Nodal increments of a strongly deformed state of an element with reference nodes
+    /// `x0`: stretch, shear, bending and large director rotations.
+    pub(in crate::element) fn strongly_deformed(x0: &[Vector3<f64>; 4]) -> ElemVec {
+        let mut u = ElemVec::zeros();
+        for a in 0..4 {
+            u[5 * a] = 0.15 * x0[a].y + 0.05 * a as f64;
+            u[5 * a + 1] = -0.1 * x0[a].x;
+            u[5 * a + 2] = 0.3 * x0[a].x * x0[a].y;
+            u[5 * a + 3] = 0.4 - 0.1 * a as f64;
+            u[5 * a + 4] = -0.3 + 0.2 * a as f64;
+        }
+        u
+    }
+
     pub(in crate::element) fn frames(d: &[Vector3<f64>; 4]) -> [DirectorFrame; 4] {
         std::array::from_fn(|a| DirectorFrame::new(d[a], Some(Vector3::x())))
     }
@@ -817,14 +831,7 @@ pub(super) mod tests {
                 }
                 let el = ShellElement { x0, d0, grain: None, section: &sec };
                 // A strongly deformed state: stretch, shear, large rotation of the directors.
-                let mut u = ElemVec::zeros();
-                for a in 0..4 {
-                    u[5 * a] = 0.15 * x0[a].y + 0.05 * a as f64;
-                    u[5 * a + 1] = -0.1 * x0[a].x;
-                    u[5 * a + 2] = 0.3 * x0[a].x * x0[a].y;
-                    u[5 * a + 3] = 0.4 - 0.1 * a as f64;
-                    u[5 * a + 4] = -0.3 + 0.2 * a as f64;
-                }
+                let u = strongly_deformed(&x0);
                 let (x, f) = apply(&[Vector3::zeros(); 4], &frames(&d0), &u);
                 let out = el.response(&x, &f, true).unwrap();
                 let k = out.stiffness.unwrap();

@@ -229,7 +229,7 @@ mod tests {
     use nalgebra::Vector3;
 
     use super::super::mixed::{extrapolate, point_count, unknown_change, Mixed, PointRecord};
-    use super::super::shell4::tests::{apply, frames, geometry, section_of};
+    use super::super::shell4::tests::{apply, frames, geometry, section_of, strongly_deformed};
     use super::super::shell4::{ElemVec, Section, SectionRule, ShearTreatment, ShellElement};
     use crate::material::{LaminaPly, Laminate, Voigt5};
 
@@ -258,14 +258,7 @@ mod tests {
                 assert!(rule.resultants.is_some(), "{name} {shear:?}: {} levels without resultants", rule.levels.len());
                 let plain = rule.clone().level_by_level();
                 let geom = el.geometry(&rule).unwrap();
-                let mut u = ElemVec::zeros();
-                for a in 0..4 {
-                    u[5 * a] = 0.15 * x0[a].y + 0.05 * a as f64;
-                    u[5 * a + 1] = -0.1 * x0[a].x;
-                    u[5 * a + 2] = 0.3 * x0[a].x * x0[a].y;
-                    u[5 * a + 3] = 0.4 - 0.1 * a as f64;
-                    u[5 * a + 4] = -0.3 + 0.2 * a as f64;
-                }
+                let u = strongly_deformed(&x0);
                 let (x, f) = apply(&[Vector3::zeros(); 4], &frames(&d0), &u);
                 let close = |what: &str, a: &[f64], b: &[f64]| {
                     let scale = b.iter().fold(0.0f64, |m, v| m.max(v.abs()));
