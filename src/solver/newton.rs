@@ -170,7 +170,7 @@ pub(super) struct Descent {
 impl<'m> Solver<'m> {
     /// Builds the pattern and the symbolic factorization of `model`.
     pub fn new(model: &'m Model, settings: SolverSettings) -> Result<Self, String> {
-        let threads = if settings.threads == 0 { rayon::current_num_threads() } else { settings.threads };
+        let threads = if settings.factor_threads == 0 { rayon::current_num_threads() } else { settings.factor_threads };
         let t0 = Instant::now();
         let assembler = Assembler::new(model);
         let cholesky = SparseCholesky::analyse(&assembler.pattern, threads).map_err(|e| e.to_string())?;
@@ -217,7 +217,7 @@ impl<'m> Solver<'m> {
         couplings.dedup();
         let mut assembler = Assembler::with_couplings(self.model, &couplings);
         assembler.mixed = self.assembler.mixed;
-        let threads = if self.settings.threads == 0 { rayon::current_num_threads() } else { self.settings.threads };
+        let threads = if self.settings.factor_threads == 0 { rayon::current_num_threads() } else { self.settings.factor_threads };
         let grown = match SparseCholesky::analyse(&assembler.pattern, threads) {
             Ok(cholesky) => {
                 self.values = vec![0.0; assembler.nnz()];
