@@ -320,8 +320,10 @@ impl<'m> Solver<'m> {
         let incremental_potential = self.incremental_potential(ds);
         let to_rest = incremental_potential && ds.duration == 0.0;
         let mut last_correction = f64::INFINITY;
-        // The best iterate of a step to rest (lowest relative residual): (residual, state,
+        // The lowest relative residual of the step so far, and (kept only once it is within
+        // INEXACT_BEST, the only case `accept_best` uses it) that iterate: (residual, state,
         // strain energy, static residual, static residual vector).
+        let mut best_rel = f64::INFINITY;
         let mut best: Option<(f64, State, f64, f64, Vec<f64>)> = None;
         self.assembler.project = false;
         // An indefinite tangent is projected by assembling the same state again: keep the
@@ -359,8 +361,11 @@ impl<'m> Solver<'m> {
                     return TimeStep::Converged { iterations: it, residuals, static_residual: static_rel, energy, static_r };
                 }
             }
-            if to_rest && best.as_ref().is_none_or(|b| rel < b.0) {
-                best = Some((rel, state.clone(), energy, static_rel, static_r.clone()));
+            if to_rest && rel < best_rel {
+                best_rel = rel;
+                if rel <= INEXACT_BEST {
+                    best = Some((rel, state.clone(), energy, static_rel, static_r.clone()));
+                }
             }
             // Leaving a saddle of the incremental potential: the energy falls but the residual
             // grows geometrically from its best value (the descent follows negative
@@ -368,7 +373,7 @@ impl<'m> Solver<'m> {
             // step if it is close enough, else Δt is cut.
             let diverging = to_rest
                 && residuals.len() >= 4
-                && best.as_ref().is_some_and(|b| rel > 3.0 * b.0)
+                && rel > 3.0 * best_rel
                 && residuals[residuals.len() - 4..].windows(2).all(|w| w[1] > 1.2 * w[0]);
             if diverging {
                 self.assembler.project = false;
@@ -485,12 +490,13 @@ impl<'m> Solver<'m> {
 
     /// A step to rest whose Newton iteration did not converge (it diverged from a saddle of
     /// the incremental potential after nearly reaching it, or stalled) ends at its best
-    /// iterate when that iterate's relative residual is within [`INEXACT_BEST`]: `state` is
+    /// iterate when that iterate's relative residual is within [`INEXACT_BEST`] (`best` holds
+    /// it only then): `state` is
     /// set to it and assembled again (forces and contact state consistent for the commit).
     /// Pseudo-transient steps away from rest need not be exact (Kelley & Keyes 1998); rest
     /// itself is still judged on the static residual and the kinetic energy.
     fn accept_best(&mut self, state: &mut State, scales: &[f64], best: &mut Option<(f64, State, f64, f64, Vec<f64>)>, iterations: usize, residuals: &mut Vec<f64>) -> Option<TimeStep> {
-        let (rel, at, energy, static_residual, static_r) = best.take().filter(|b| b.0 <= INEXACT_BEST)?;
+        let (rel, at, energy, static_residual, static_r) = best.take()?;
         *state = at;
         self.assembler.forget_mixed();
         self.assemble(state, scales, true).ok()?;
