@@ -374,6 +374,19 @@ impl Assembler {
         Self { pattern, slots, rules, geometry, orientation, tied, linked, colours, serial, project: false, mixed: false, records, keep_responses: false, cache: Mutex::new(ResponseCache::default()) }
     }
 
+    /// Takes over the settings (`project`, `mixed`, `keep_responses`) and the kept element
+    /// responses of `old`, the assembler of the same model before its pattern grew: element
+    /// responses do not depend on the pattern, so a re-assembly of the kept state still only
+    /// scatters them. The mixed-stress records are not taken over (a new pattern starts from
+    /// the standard tangent, as before).
+    pub fn take_over(&mut self, old: &mut Assembler) {
+        self.project = old.project;
+        self.mixed = old.mixed;
+        self.keep_responses = old.keep_responses;
+        let kept = std::mem::take(&mut *old.cache.lock().unwrap_or_else(|p| p.into_inner()));
+        *self.cache.lock().unwrap_or_else(|p| p.into_inner()) = kept;
+    }
+
     /// Drops every mixed-stress record, so the next tangent of each element is the standard
     /// one (after a state is restored, e.g. on a cut-back: the records of the abandoned
     /// iterates would extrapolate from the wrong configuration).

@@ -7,12 +7,14 @@ pub mod damped;
 pub mod diagnose;
 pub mod dynamics;
 pub mod eigen;
+mod growth;
 pub mod imperfection;
 mod inertia;
 pub mod linear;
 pub mod newton;
 pub mod nodal;
 mod report;
+mod reuse;
 mod saddle;
 
 pub use chord::ChordSettings;

@@ -13,6 +13,7 @@ use serde::Serialize;
 
 use super::linear::{FactorKind, SparseCholesky};
 use super::{StepKind, SolverSettings};
+use super::growth::NodalTangent;
 use crate::assembly::{Assembler, AssemblyFailure};
 pub use super::report::{IncrementReport, Progress, SolveError};
 use crate::element::NODE_DOFS;
@@ -140,6 +141,8 @@ pub struct Solver<'m> {
     pub(super) couplings: Vec<(usize, usize)>,
     /// CSC positions of the last assembly's contact blocks (`nodal::BlockSlots`).
     pub(super) block_slots: super::nodal::BlockSlots,
+    /// The nodal-force terms' last evaluation, for an assembly of the same state (`reuse`).
+    pub(super) nodal_cache: super::reuse::NodalCache,
     /// Sum of the nodal-force terms' potentials at the last assembly (None: a term is not
     /// conservative).
     pub(super) nodal_potential: Option<f64>,
@@ -190,6 +193,7 @@ impl<'m> Solver<'m> {
             extra_reports: Vec::new(),
             couplings: Vec::new(),
             block_slots: Default::default(),
+            nodal_cache: Default::default(),
             nodal_potential: Some(0.0),
             clock: 0.0,
             clock_trial: 0.0,
@@ -201,37 +205,10 @@ impl<'m> Solver<'m> {
     pub fn add_nodal_forces(&mut self, forces: Box<dyn super::NodalForces + 'm>) {
         let pairs = forces.couplings(self.model);
         self.nodal_forces.push(forces);
+        self.nodal_cache.forget();
         if !pairs.is_empty() {
             self.grow_pattern(pairs);
         }
-    }
-
-    /// Couples the node pairs `pairs` in the tangent's pattern: rebuilds the pattern and the
-    /// scatter maps and redoes the symbolic analysis. Returns false (pattern unchanged) when
-    /// the analysis of the grown pattern fails.
-    pub(super) fn grow_pattern(&mut self, pairs: Vec<(usize, usize)>) -> bool {
-        let t0 = Instant::now();
-        let mut couplings = self.couplings.clone();
-        couplings.extend(pairs);
-        couplings.sort_unstable();
-        couplings.dedup();
-        let mut assembler = Assembler::with_couplings(self.model, &couplings);
-        assembler.mixed = self.assembler.mixed;
-        let threads = if self.settings.factor_threads == 0 { rayon::current_num_threads() } else { self.settings.factor_threads };
-        let grown = match SparseCholesky::analyse(&assembler.pattern, threads) {
-            Ok(cholesky) => {
-                self.values = vec![0.0; assembler.nnz()];
-                self.assembler = assembler;
-                self.cholesky = cholesky;
-                self.couplings = couplings;
-                self.block_slots.clear();
-                self.timings.pattern_growths += 1;
-                true
-            }
-            Err(_) => false,
-        };
-        self.timings.analysis += t0.elapsed().as_secs_f64();
-        grown
     }
 
     /// The configuration-dependent nodal-force terms.
@@ -241,6 +218,7 @@ impl<'m> Solver<'m> {
 
     /// Tells the nodal-force terms that an attempt of relative size `fraction` begins.
     pub(super) fn begin_nodal_increment(&mut self, fraction: f64) {
+        self.nodal_cache.forget();
         for c in self.nodal_forces.iter_mut() {
             c.begin_increment(fraction);
         }
@@ -251,6 +229,7 @@ impl<'m> Solver<'m> {
     /// the initial iterate `state`.
     pub(super) fn begin_nodal_motion(&mut self, to: f64, state: &mut State) {
         self.clock_trial = to;
+        self.nodal_cache.forget();
         let from = self.clock;
         for c in self.nodal_forces.iter_mut() {
             c.begin_motion(self.model, from, to, state);
@@ -271,6 +250,7 @@ impl<'m> Solver<'m> {
     /// next increment report.
     pub(super) fn commit_nodal_forces(&mut self, state: &State) {
         self.clock = self.clock_trial;
+        self.nodal_cache.forget();
         for c in self.nodal_forces.iter_mut() {
             if let Some(r) = c.commit(self.model, state) {
                 self.extra_reports.push(r);
@@ -324,35 +304,36 @@ impl<'m> Solver<'m> {
         self.model.external_force(state, scales, &mut self.f_ext);
         if !self.nodal_forces.is_empty() {
             let t = Instant::now();
-            let mut jacobian = Vec::new();
-            let mut pairs = Vec::new();
-            let mut f = vec![0.0; self.f_ext.len()];
-            for forces in self.nodal_forces.iter_mut() {
-                forces.add_coupled(self.model, state, &mut f, &mut jacobian, &mut pairs);
-            }
-            self.nodal_norm = f.iter().map(|v| v * v).sum::<f64>().sqrt();
-            self.nodal_potential = self.nodal_forces.iter().map(|c| c.potential()).sum();
-            // Forces on tied slaves fold onto their masters like the other loads.
-            self.model.dofs.fold(&mut f);
-            self.f_ext.iter_mut().zip(&f).for_each(|(e, v)| *e += v);
-            if tangent {
-                let p = &self.assembler.pattern;
-                self.block_slots.add_node_blocks(self.model, &p.col_ptr, &p.row_idx, &mut self.values, &jacobian);
-                let outside = self.block_slots.add_pair_blocks(self.model, &p.col_ptr, &p.row_idx, &mut self.values, &pairs);
-                if !outside.is_empty() {
-                    // A pair came into contact outside the reference neighbourhood (rare):
-                    // grow the pattern and assemble again; if that fails, drop the blocks.
-                    self.timings.contact += t.elapsed().as_secs_f64();
-                    let n_outside = outside.len();
-                    if self.grow_pattern(outside) {
-                        return self.assemble(state, scales, tangent);
+            let analysis = self.timings.analysis;
+            // The same state as the last evaluation (`reuse`): its forces and blocks again.
+            let evaluation = match self.nodal_cache.take(state) {
+                Some(kept) => kept,
+                None => {
+                    let mut ev = super::reuse::NodalEvaluation { f: vec![0.0; self.f_ext.len()], ..Default::default() };
+                    for forces in self.nodal_forces.iter_mut() {
+                        forces.add_coupled(self.model, state, &mut ev.f, &mut ev.jacobian, &mut ev.pairs);
                     }
-                    self.timings.dropped_pair_blocks += n_outside;
-                    return Ok(info.energy);
+                    ev.norm = ev.f.iter().map(|v| v * v).sum::<f64>().sqrt();
+                    // Forces on tied slaves fold onto their masters like the other loads.
+                    self.model.dofs.fold(&mut ev.f);
+                    ev
                 }
-            }
-            self.timings.contact += t.elapsed().as_secs_f64();
+            };
+            self.nodal_norm = evaluation.norm;
+            self.nodal_potential = self.nodal_forces.iter().map(|c| c.potential()).sum();
+            self.f_ext.iter_mut().zip(&evaluation.f).for_each(|(e, v)| *e += v);
+            let outcome = if tangent { self.add_nodal_tangent(&evaluation) } else { NodalTangent::Added };
+            self.nodal_cache.keep(state, evaluation);
+            // A growth's symbolic analysis has its own timer.
+            self.timings.contact += t.elapsed().as_secs_f64() - (self.timings.analysis - analysis);
             self.timings.contact_search = self.nodal_forces.iter().map(|c| c.search_seconds()).sum();
+            match outcome {
+                NodalTangent::Added => {}
+                // Blocks dropped: no link stiffness either (as before the growth).
+                NodalTangent::Dropped => return Ok(info.energy),
+                // The kept evaluation of this state serves the assembly into the grown pattern.
+                NodalTangent::Reassemble => return self.assemble(state, scales, tangent),
+            }
         }
         if tangent {
             // Rigid links: second-order term of the state-dependent tie weights.
@@ -475,10 +456,20 @@ impl<'m> Solver<'m> {
             for tries in 0..40 {
                 *state = base.clone();
                 self.model.update(state, du, s);
+                // The first trial is assembled with its tangent (it is usually accepted);
+                // later ones only compare potentials (`reuse::trial_potential`).
                 let tangent = tries == 0;
-                match self.assemble(state, scales, tangent) {
-                    Ok(e) if self.f_int.iter().chain(&self.f_ext).all(|v| v.is_finite()) => {
-                        let pi = self.potential(state, scales, e).map(|p| p + extra(self, state)).unwrap_or(f64::NAN);
+                let trial = if tangent {
+                    self.assemble(state, scales, true).map(|e| {
+                        let finite = self.f_int.iter().chain(&self.f_ext).all(|v| v.is_finite());
+                        (e, finite.then(|| self.potential(state, scales, e)))
+                    })
+                } else {
+                    self.trial_potential(state, scales)
+                };
+                match trial {
+                    Ok((e, Some(potential))) => {
+                        let pi = potential.map(|p| p + extra(self, state)).unwrap_or(f64::NAN);
                         if pi.is_finite() && pi <= pi0 + 1e-4 * s * slope + tol {
                             if !tangent && let Err(f) = self.assemble(state, scales, true) {
                                 last = f.to_string();

@@ -49,6 +49,21 @@ pub trait NodalForces: Send {
     fn potential(&self) -> Option<f64> {
         None
     }
+    /// The potential of the forces at `state` alone, for a trial state of the energy line
+    /// search that only compares potentials: what [`NodalForces::potential`] returns after
+    /// an `add_coupled` at `state` (NaN where that would write NaN into the forces, an
+    /// inadmissible state). Default: that `add_coupled`, into scratch arrays. A term may
+    /// evaluate its energy alone, without derivatives, leaving its record of the last
+    /// evaluation (that of a Newton iterate) as it was.
+    fn potential_at(&mut self, model: &Model, state: &State) -> Option<f64> {
+        let mut f = vec![0.0; NODE_DOFS * model.n_nodes()];
+        let (mut jacobian, mut pairs) = (Vec::new(), Vec::new());
+        self.add_coupled(model, state, &mut f, &mut jacobian, &mut pairs);
+        if f.iter().any(|v| !v.is_finite()) {
+            return Some(f64::NAN);
+        }
+        self.potential()
+    }
     /// Largest fraction s ∈ [0, 1] of the straight move of every node from `from` to `to`
     /// that stays admissible for this term (continuous collision detection of a barrier).
     /// Default 1.

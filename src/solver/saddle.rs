@@ -19,9 +19,12 @@ impl<'m> Solver<'m> {
     /// stability tangent ([`super::NodalForces::stability_tangent`]: an augmented-Lagrangian
     /// contact, whose Uzawa fixed point enforces the gap exactly, in its constraint limit).
     fn assemble_stability_tangent(&mut self, state: &State, scales: &[f64]) -> bool {
+        // The terms' blocks change with the switch: no kept evaluation serves either side.
+        self.nodal_cache.forget();
         self.nodal_forces.iter_mut().for_each(|f| f.stability_tangent(true));
         let ok = self.assemble(state, scales, true).is_ok();
         self.nodal_forces.iter_mut().for_each(|f| f.stability_tangent(false));
+        self.nodal_cache.forget();
         ok
     }
 

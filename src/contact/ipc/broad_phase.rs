@@ -43,6 +43,21 @@ pub fn boxes_overlap(a: &[usize], pad_a: f64, b: &[usize], pad_b: f64, configs: 
     (0..3).all(|k| ba.mins[k] <= bb.maxs[k] && bb.mins[k] <= ba.maxs[k])
 }
 
+/// Whether two boxes overlap (boundaries included): the test of [`boxes_overlap`] on boxes
+/// already built.
+pub fn overlap(a: &Aabb, b: &Aabb) -> bool {
+    (0..3).all(|k| a.mins[k] <= b.maxs[k] && b.mins[k] <= a.maxs[k])
+}
+
+/// The boxes of every point, triangle and edge over `configs`, each inflated by its pad:
+/// those [`boxes_overlap`] builds for one pair, built once per primitive.
+pub fn primitive_boxes(points: &[usize], tris: &[[usize; 3]], edges: &[[usize; 2]], configs: &[&dyn Fn(usize) -> Vector3<f64>], pads: &Pads) -> (Vec<Aabb>, Vec<Aabb>, Vec<Aabb>) {
+    let tri_boxes: Vec<Aabb> = tris.iter().zip(pads.tri).map(|(t, &r)| aabb(configs.iter().flat_map(|x| t.iter().map(move |&n| x(n))), r)).collect();
+    let edge_boxes: Vec<Aabb> = edges.iter().zip(pads.edge).map(|(e, &r)| aabb(configs.iter().flat_map(|x| e.iter().map(move |&n| x(n))), r)).collect();
+    let point_boxes: Vec<Aabb> = points.iter().zip(pads.point).map(|(&n, &r)| aabb(configs.iter().map(|x| x(n)), r)).collect();
+    (point_boxes, tri_boxes, edge_boxes)
+}
+
 /// A refit after this many calls is replaced by a fresh build: refitting keeps the tree's
 /// topology, whose boxes loosen as the surface deforms far from where it was built.
 const REBUILD_AFTER: usize = 64;
@@ -90,9 +105,7 @@ pub fn candidates(
     edge_ok: &(dyn Fn(usize, usize) -> bool + Sync),
     trees: &Mutex<Trees>,
 ) -> (Vec<(usize, usize)>, Vec<(usize, usize)>) {
-    let tri_boxes: Vec<Aabb> = tris.iter().zip(pads.tri).map(|(t, &r)| aabb(configs.iter().flat_map(|x| t.iter().map(move |&n| x(n))), r)).collect();
-    let edge_boxes: Vec<Aabb> = edges.iter().zip(pads.edge).map(|(e, &r)| aabb(configs.iter().flat_map(|x| e.iter().map(move |&n| x(n))), r)).collect();
-    let point_boxes: Vec<Aabb> = points.iter().zip(pads.point).map(|(&n, &r)| aabb(configs.iter().map(|x| x(n)), r)).collect();
+    let (point_boxes, tri_boxes, edge_boxes) = primitive_boxes(points, tris, edges, configs, pads);
     let mut guard = trees.lock().unwrap_or_else(|e| e.into_inner());
     let t = &mut *guard;
     let rebuild = t.refits >= REBUILD_AFTER;

@@ -53,7 +53,7 @@ use std::time::Instant;
 use nalgebra::{Matrix3, Vector3};
 use rayon::prelude::*;
 
-use super::broad_phase::{boxes_overlap, candidates, Pads, Sweep, Trees};
+use super::broad_phase::{candidates, overlap, primitive_boxes, Pads, Sweep, Trees};
 use super::friction::{Friction, FrictionTerm};
 use super::potential::{derivative, group, mollified_derivative, Blocks, Derivative, FeatureKey, FxMap, Scalar};
 pub use super::report::{SurfaceIncrement, SurfaceTimings};
@@ -437,16 +437,6 @@ impl SurfaceContact {
         out
     }
 
-    /// Whether the boxes of candidate `pair` over `configs`, inflated by its primitives'
-    /// `pads`, overlap (the broad phase's test for this one pair).
-    fn pair_overlaps(&self, pair: &Pair, configs: &[&dyn Fn(usize) -> Vector3<f64>], pads: &Pads) -> bool {
-        let (kind, (i, j), _, _) = *pair;
-        match kind {
-            Kind::PointTriangle => boxes_overlap(&[self.points[i]], pads.point[i], &self.tris[j], pads.tri[j], configs),
-            Kind::EdgeEdge => boxes_overlap(&self.edges[i], pads.edge[i], &self.edges[j], pads.edge[j], configs),
-        }
-    }
-
     /// The candidates of the sweep from `x0` to `x1` (each point's box `lo`..`hi` over it)
     /// with the sweep pads: the same pairs, in the same order, as a search of the trees, but
     /// filtered from the kept candidates of [`Near`] while every point stays within their
@@ -470,7 +460,16 @@ impl SurfaceContact {
             }
         }
         let Some(n) = near.as_ref() else { return Vec::new() };
-        n.pairs.iter().filter(|p| self.pair_overlaps(p, &configs, &pads)).copied().collect()
+        // Each primitive's box once, then the broad phase's box test per kept pair.
+        let (pb, tb, eb) = primitive_boxes(&self.points, &self.tris, &self.edges, &configs, &pads);
+        n.pairs
+            .par_iter()
+            .filter(|&&(kind, (i, j), _, _)| match kind {
+                Kind::PointTriangle => overlap(&pb[i], &tb[j]),
+                Kind::EdgeEdge => overlap(&eb[i], &eb[j]),
+            })
+            .copied()
+            .collect()
     }
 
     /// The active pairs at `state` (gap below d̂): gap, energy κ_p m_p b(d, d̂_p), normal force
@@ -545,7 +544,9 @@ impl SurfaceContact {
         let grouped = group(terms.iter().filter(|t| t.mollified.is_none() && t.energy.is_finite()).map(|t| (t.feature, t.scalar)));
         let n_mollified = terms.iter().filter(|t| t.mollified.is_some()).count();
         let mut out: Vec<Derivative> = Vec::with_capacity(grouped.len() + n_mollified);
-        out.par_extend(grouped.par_iter().map(|(k, s)| derivative(k, s, x)));
+        // Written in place (an indexed collect), not gathered in chunks and copied.
+        grouped.par_iter().map(|(k, s)| derivative(k, s, x)).collect_into_vec(&mut out);
+        out.reserve(n_mollified);
         out.extend(terms.iter().filter_map(|t| t.mollified.as_ref().map(|e| (**e).clone())));
         out
     }
@@ -591,8 +592,10 @@ impl NodalForces for SurfaceContact {
             pot += term.energy;
         }
         if pot.is_finite() {
-            for d in self.barrier_derivatives(&terms, &x) {
-                blocks.add_derivative(&d, f_ext, true);
+            // By reference: a derivative is 1.3 KB, and moving each out of the list cost
+            // more than adding it.
+            for d in &self.barrier_derivatives(&terms, &x) {
+                blocks.add_derivative(d, f_ext, true);
             }
         }
         for ft in &fr {
@@ -614,6 +617,33 @@ impl NodalForces for SurfaceContact {
 
     fn potential(&self) -> Option<f64> {
         Some(self.last_potential)
+    }
+
+    /// The barrier and friction energies at `state` summed as `add_coupled` sums them (the
+    /// same value, bit for bit: the same terms in the same order), without their gradients
+    /// and Hessians; infinite at a pair through zero gap. The record of the last evaluation
+    /// (`last`, used by `commit`) is left alone.
+    fn potential_at(&mut self, model: &Model, state: &State) -> Option<f64> {
+        let t = Instant::now();
+        let terms = self.evaluate(model, state, false);
+        let x = |a: usize| model.x0[a] + state.u[a];
+        let fr = self.friction_terms(&x, false);
+        self.search_s += t.elapsed().as_secs_f64();
+        let mut pot = 0.0;
+        for term in &terms {
+            if !term.energy.is_finite() {
+                pot = f64::INFINITY;
+                continue;
+            }
+            pot += term.energy;
+        }
+        for ft in &fr {
+            pot += ft.energy;
+        }
+        if let Ok(mut tm) = self.timings.lock() {
+            tm.evaluate += t.elapsed().as_secs_f64();
+        }
+        Some(pot)
     }
 
     fn is_barrier(&self) -> bool {
