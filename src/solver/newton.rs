@@ -93,6 +93,10 @@ pub struct Timings {
     /// Step halvings of the energy line search (after the collision-free bound).
     #[serde(default)]
     pub line_search_cuts: usize,
+    /// Energy line searches that accepted a shortened step (their first, tangent-assembled
+    /// trial was rejected).
+    #[serde(default)]
+    pub line_searches_cut: usize,
     /// Newton iterations whose tangent had its element Hessians projected to PSD.
     #[serde(default)]
     pub projected_iterations: usize,
@@ -476,6 +480,7 @@ impl<'m> Solver<'m> {
                                 failing = Some(f.element);
                                 break;
                             }
+                            self.timings.line_searches_cut += usize::from(cuts > 0);
                             return Ok(Descent { energy: e, cuts });
                         }
                         last = format!("no decrease of the potential down to step {s:.2e} (Π₀ = {pi0:.6e}, slope {slope:.3e})");
