@@ -11,6 +11,7 @@ mod growth;
 pub mod imperfection;
 mod inertia;
 pub mod linear;
+mod line_search;
 pub mod newton;
 pub mod nodal;
 mod report;
