@@ -206,6 +206,8 @@ fn curved_edge_uses_its_arc_length() {
     let built = scene::build(&sc, "top.ron", &wide).unwrap_or_else(|e| panic!("{e}"));
     let seam = built.seams.iter().find(|x| x.name == "hem_seam").expect("hem seam");
     let centre = nalgebra::Vector3::new(0.2, r - s, 0.0);
+    // The sampled front hem is the finer row but pinned (`hem`), so it stays the master
+    // (`GarmentMesh::ties`: a supported row is not made the slave of a free one).
     for (k, &n) in seam.master.iter().enumerate() {
         let off = ((built.model.x0[n] - centre).norm() - r).abs();
         let bound = if k % 2 == 0 { 1e-9 * r } else { 0.2_f64.powi(2) / (8.0 * r) };

@@ -13,7 +13,7 @@ use super::sizing::SizeField;
 use super::spec::{GarmentSpec, SpanRef};
 use super::seam::rigid_link;
 use super::{seam_ties, SeamInfo};
-use crate::element::DirectorFrame;
+use crate::element::{DirectorFrame, NODE_DOFS};
 use crate::mesh::ShellMesh;
 use crate::model::{Load, Tie};
 use crate::scene::{Locator, SceneError};
@@ -104,6 +104,75 @@ fn matching_counts(spec: &GarmentSpec, pi: usize, sizes: &[SizeField]) -> Vec<Op
         }
     }
     counts
+}
+
+/// Makes the seam ties a master–slave system (every DOF the slave of at most one tie, no
+/// cycle) without losing a junction. A node where several seams meet (a crotch point: two
+/// front, two back and two inner-leg panels) is the end of several rows, so several ties
+/// name it as their slave, each with the single master DOF at the end of its partner row
+/// (weight 1). Keeping only the first of them left the other panels' corners unsewn there.
+/// Such ties are kept as equations between nodes: a point-to-point tie u_s = u_m + c λ that
+/// joins two DOFs already joined by earlier ones is redundant and dropped (the offsets, minus
+/// initial gaps, add up to zero round any loop); a translation tie whose slave is taken is
+/// solved for its dominant master instead (u_m = u_s − c λ for a point tie) when that master
+/// is free and no cycle results; only otherwise is it dropped, as are repeated slaves of
+/// rotation ties and of links through the thickness.
+fn join_at_junctions(ties: Vec<Tie>, fixed: &[bool]) -> Vec<Tie> {
+    let n = ties.iter().flat_map(|t| std::iter::once(t.slave).chain(t.masters.iter().map(|m| m.0))).max().map_or(0, |m| m + 1);
+    let mut parent: Vec<usize> = (0..n).collect();
+    fn root(parent: &mut [usize], mut a: usize) -> usize {
+        while parent[a] != a {
+            parent[a] = parent[parent[a]];
+            a = parent[a];
+        }
+        a
+    }
+    // Masters of each kept tie's slave, to refuse a tie that would close a cycle.
+    let mut masters_of: Vec<Vec<usize>> = vec![Vec::new(); n];
+    let mut slave = vec![false; n];
+    let depends = |masters_of: &[Vec<usize>], from: &[(usize, f64)], on: usize| {
+        let mut stack: Vec<usize> = from.iter().map(|m| m.0).collect();
+        let mut seen = BTreeSet::new();
+        while let Some(a) = stack.pop() {
+            if a == on {
+                return true;
+            }
+            if seen.insert(a) {
+                stack.extend(&masters_of[a]);
+            }
+        }
+        false
+    };
+    let mut out = Vec::with_capacity(ties.len());
+    for t in ties {
+        let point = t.links.is_empty() && t.masters.len() == 1 && (t.masters[0].1 - 1.0).abs() <= 1e-12;
+        let joined = point.then(|| (root(&mut parent, t.slave), root(&mut parent, t.masters[0].0)));
+        if joined.is_some_and(|(ra, rb)| ra == rb) {
+            continue;
+        }
+        // The same equation solved for its dominant master m*: a translation tie
+        // u_s = Σ w_i u_i + c λ is also u_m* = (u_s − Σ_{i≠*} w_i u_i − c λ) / w* (row ends of
+        // non-matching rows weigh their end master by nearly, not exactly, 1).
+        let reversed = (t.links.is_empty() && t.slave % NODE_DOFS < 3)
+            .then(|| t.masters.iter().copied().max_by(|a, b| a.1.total_cmp(&b.1)))
+            .flatten()
+            .filter(|&(_, w)| w >= 0.5)
+            .map(|(m, w)| {
+                let masters = std::iter::once((t.slave, 1.0 / w)).chain(t.masters.iter().filter(|x| x.0 != m).map(|&(i, c)| (i, -c / w))).collect();
+                Tie { slave: m, masters, offset: -t.offset / w, load: t.load, links: Vec::new() }
+            });
+        // A supported DOF stays a master (unless the tie already named it slave).
+        let candidates = std::iter::once(t).chain(reversed.filter(|r| !fixed.get(r.slave).copied().unwrap_or(false)));
+        if let Some(tie) = candidates.into_iter().find(|c| !slave[c.slave] && !depends(&masters_of, &c.masters, c.slave)) {
+            slave[tie.slave] = true;
+            masters_of[tie.slave] = tie.masters.iter().map(|m| m.0).collect();
+            if let Some((ra, rb)) = joined {
+                parent[ra] = rb;
+            }
+            out.push(tie);
+        }
+    }
+    out
 }
 
 /// Distance from a point to a polyline in the plane.
@@ -216,6 +285,13 @@ impl GarmentMesh {
     }
 
     /// Seam and stitch-line ties. `first_node[k]` is the first global node of garment part k.
+    /// The side whose span has more mesh nodes is the slave (b when they have as many): a
+    /// tie constrains only the slave nodes, each to the master row's piecewise-linear
+    /// interpolation, so a master row finer than its slave row would leave its nodes between
+    /// the slave nodes unsewn — free edge nodes that a closing seam drags the panel's edge
+    /// past (the rule for scene seams: make the finer row the slave) — unless only the finer
+    /// row has supported nodes (`fixed`: a supported slave needs supported masters). Below,
+    /// "a" is the master side and "b" the slave side.
     /// Each seam ties ply k of panel b to ply k of panel a (or a's innermost ply) with the
     /// seam's kind and closing load, and links a's plies 1.. rigidly to its ply 0 along the
     /// span (all plies sewn together; the links keep the stack's thickness offsets along ply
@@ -234,6 +310,7 @@ impl GarmentMesh {
         loads: &[Load],
         x0: &[Vector3<f64>],
         frames0: &mut [DirectorFrame],
+        fixed: &[bool],
     ) -> Result<(Vec<Tie>, Vec<SeamInfo>), SceneError> {
         let mut ties = Vec::new();
         let mut infos = Vec::new();
@@ -252,6 +329,13 @@ impl GarmentMesh {
             };
             let row_a = span_row(&self.patterns[pa], &self.sample_ranges[pa], &spec.panels[pa], &s.a);
             let row_b = span_row(&self.patterns[pb], &self.sample_ranges[pb], &spec.panels[pb], &s.b);
+            // The finer row is the slave (see above), unless it is supported and the other
+            // is not (a supported slave must have supported masters).
+            let supported = |p: usize, row: &[usize]| {
+                (0..self.n_parts(p)).filter_map(|k| self.part_of(p, k)).any(|part| row.iter().any(|&n| fixed.get(NODE_DOFS * (n + first_node[part])..NODE_DOFS * (n + first_node[part] + 1)).is_some_and(|f| f.iter().any(|&x| x))))
+            };
+            let swap = row_a.len() > row_b.len() && !(supported(pa, &row_a) && !supported(pb, &row_b));
+            let (pa, row_a, pb, row_b) = if swap { (pb, row_b, pa, row_a) } else { (pa, row_a, pb, row_b) };
             let global = |part: usize, row: &[usize]| -> Vec<usize> { row.iter().map(|n| n + first_node[part]).collect() };
             let (na, nb) = (self.n_parts(pa), self.n_parts(pb));
             let master_part = self.part_of(pa, 0).ok_or_else(|| err("panel without plies".into()))?;
@@ -288,11 +372,7 @@ impl GarmentMesh {
                 }
             }
         }
-        // A node on two seams or on a seam and a stitch line keeps its first tie per DOF
-        // (it is already joined through that tie's chain).
-        let mut seen = std::collections::HashSet::new();
-        ties.retain(|t| seen.insert(t.slave));
-        Ok((ties, infos))
+        Ok((join_at_junctions(ties, fixed), infos))
     }
 
     /// Export layout: ids of panels, plies (in stack order, innermost first, see
@@ -398,5 +478,59 @@ impl GarmentMesh {
             }
         }
         out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn point(s: usize, m: usize, c: f64) -> Tie {
+        Tie { slave: s, masters: vec![(m, 1.0)], offset: c, load: Some(0), links: Vec::new() }
+    }
+
+    /// Solves the kept ties for the slaves with every free DOF at 0 (λ = 1).
+    fn solve(ties: &[Tie], n: usize) -> Vec<f64> {
+        let mut u = vec![0.0; n];
+        for _ in 0..n {
+            for t in ties {
+                u[t.slave] = t.masters.iter().map(|&(m, w)| w * u[m]).sum::<f64>() + t.offset;
+            }
+        }
+        u
+    }
+
+    /// Four corners (DOFs 0, 5, 10, 15: x of nodes 0–3) meeting at one point, sewn by four
+    /// seams (b to a, b to c, d to c, d to a: two name a taken slave, the last closes the
+    /// loop), and the end of a non-matching row (weights 0.9999 and 0.0001). Every tie is
+    /// kept as an equation (reversed where its slave is taken) or dropped only when implied,
+    /// so every equation holds at λ = 1; keeping only each slave's first tie (b to a, d to c)
+    /// left {a, b} and {c, d} apart.
+    #[test]
+    fn junction_ties_keep_every_equation() {
+        let (a, b, c, d) = (0, 5, 10, 15);
+        let x = [0.0, 0.3, -0.2, 0.1];
+        // u_s = u_m + (x_m − x_s) closes the gap (offset −g₀).
+        let tie = |s: usize, m: usize| point(s, m, x[m / 5] - x[s / 5]);
+        let all = vec![tie(b, a), tie(b, c), tie(d, c), tie(d, a)];
+        let kept = join_at_junctions(all.clone(), &[]);
+        let mut slaves: Vec<usize> = kept.iter().map(|t| t.slave).collect();
+        slaves.sort_unstable();
+        slaves.dedup();
+        assert_eq!(slaves.len(), kept.len(), "a DOF is the slave of two ties: {kept:?}");
+        assert_eq!(kept.len(), 3, "three ties join four corners: {kept:?}");
+        let u = solve(&kept, 16);
+        for t in &all {
+            let r = u[t.slave] - t.masters.iter().map(|&(m, w)| w * u[m]).sum::<f64>() - t.offset;
+            assert!(r.abs() < 1e-14, "tie {t:?} violated by {r}");
+        }
+        // A row end weighing its end master by nearly 1: solved for that master.
+        let end = Tie { slave: a, masters: vec![(20, 0.9999), (25, 0.0001)], offset: 0.05, load: Some(0), links: Vec::new() };
+        let kept = join_at_junctions(vec![tie(a, c), end.clone()], &[]);
+        assert_eq!(kept.len(), 2);
+        assert_eq!(kept[1].slave, 20, "{kept:?}");
+        let u = solve(&kept, 26);
+        let r = u[a] - end.masters.iter().map(|&(m, w)| w * u[m]).sum::<f64>() - end.offset;
+        assert!(r.abs() < 1e-14, "{r}");
     }
 }

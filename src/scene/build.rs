@@ -656,7 +656,7 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
     let mut layout = None;
     if let Some((g, gm)) = &garment {
         layout = Some(gm.layout(g, garment_first_part, &garment_first_node, x0.len()));
-        let (t, s) = gm.ties(g, &loc, &garment_first_node, &loads, &x0, &mut frames0)?;
+        let (t, s) = gm.ties(g, &loc, &garment_first_node, &loads, &x0, &mut frames0, &fixed)?;
         ties.extend(t);
         seams.extend(s);
         let supported: Vec<bool> = gm
