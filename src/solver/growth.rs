@@ -82,25 +82,11 @@ fn add_node_block_fresh(model: &Model, p: &Pattern, fresh: &[bool], values: &mut
 /// loop order, same operations; for two free nodes each entry receives one term, the one
 /// `BlockSlots::add_pair_blocks` adds).
 fn add_node_pair_block_fresh(model: &Model, p: &Pattern, fresh: &[bool], values: &mut [f64], a: usize, b: usize, j: &Matrix3<f64>) {
-    let ea: [Vec<(usize, f64)>; 3] = std::array::from_fn(|k| model.dofs.expand(NODE_DOFS * a + k));
-    let eb: [Vec<(usize, f64)>; 3] = std::array::from_fn(|k| model.dofs.expand(NODE_DOFS * b + k));
-    for (rows_of, cols_of, transposed) in [(&ea, &eb, false), (&eb, &ea, true)] {
-        for pi in 0..3 {
-            for qi in 0..3 {
-                let v = -0.5 * if transposed { j[(qi, pi)] } else { j[(pi, qi)] };
-                for &(r, wr) in &rows_of[pi] {
-                    for &(c, wc) in &cols_of[qi] {
-                        if r > c {
-                            continue;
-                        }
-                        if let Some(s) = fresh_slot(&p.col_ptr, &p.row_idx, fresh, r, c) {
-                            values[s] += wr * wc * v;
-                        }
-                    }
-                }
-            }
+    super::nodal::for_each_pair_entry(model, a, b, j, |r, c, v| {
+        if let Some(s) = fresh_slot(&p.col_ptr, &p.row_idx, fresh, r, c) {
+            values[s] += v;
         }
-    }
+    });
 }
 
 /// How the nodal-force terms' tangent blocks went into the assembled tangent.

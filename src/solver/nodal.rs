@@ -157,29 +157,38 @@ pub(super) fn add_node_block(model: &Model, col_ptr: &[usize], row_idx: &[usize]
 /// outside the pattern (nothing is added for it). Blocks of two free nodes take
 /// [`BlockSlots`], without the transformation.
 pub(super) fn add_node_pair_block(model: &Model, col_ptr: &[usize], row_idx: &[usize], values: &mut [f64], a: usize, b: usize, j: &Matrix3<f64>) -> bool {
+    let mut inside = true;
+    for_each_pair_entry(model, a, b, j, |r, c, v| {
+        let rows = &row_idx[col_ptr[c]..col_ptr[c + 1]];
+        match rows.binary_search(&r) {
+            Ok(s) => values[col_ptr[c] + s] += v,
+            Err(_) => inside = false,
+        }
+    });
+    inside
+}
+
+/// Visits the stored entries (row r ≤ column c) of the node-pair block −½ (J, Jᵀ) of nodes
+/// `a`, `b` through the tie transformation, in a fixed order, with each entry's value
+/// w_r w_c (−½ J_pq); shared by [`add_node_pair_block`] and the pattern growth's carry-over
+/// (`growth`), which must add the same terms in the same order.
+pub(super) fn for_each_pair_entry(model: &Model, a: usize, b: usize, j: &Matrix3<f64>, mut visit: impl FnMut(usize, usize, f64)) {
     let ea: [Vec<(usize, f64)>; 3] = std::array::from_fn(|k| model.dofs.expand(NODE_DOFS * a + k));
     let eb: [Vec<(usize, f64)>; 3] = std::array::from_fn(|k| model.dofs.expand(NODE_DOFS * b + k));
-    let mut inside = true;
     for (rows_of, cols_of, transposed) in [(&ea, &eb, false), (&eb, &ea, true)] {
         for p in 0..3 {
             for q in 0..3 {
                 let v = -0.5 * if transposed { j[(q, p)] } else { j[(p, q)] };
                 for &(r, wr) in &rows_of[p] {
                     for &(c, wc) in &cols_of[q] {
-                        if r > c {
-                            continue;
-                        }
-                        let rows = &row_idx[col_ptr[c]..col_ptr[c + 1]];
-                        match rows.binary_search(&r) {
-                            Ok(s) => values[col_ptr[c] + s] += wr * wc * v,
-                            Err(_) => inside = false,
+                        if r <= c {
+                            visit(r, c, wr * wc * v);
                         }
                     }
                 }
             }
         }
     }
-    inside
 }
 
 /// Slot of a block entry that is not stored: below the diagonal of a node's own block, or
