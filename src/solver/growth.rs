@@ -61,21 +61,11 @@ fn fresh_slot(col_ptr: &[usize], row_idx: &[usize], fresh: &[bool], r: usize, c:
 /// [`super::nodal::add_node_block`] restricted to the entries marked in `fresh` (same loop
 /// order, same operations).
 fn add_node_block_fresh(model: &Model, p: &Pattern, fresh: &[bool], values: &mut [f64], n: usize, j: &Matrix3<f64>) {
-    let expanded: [Vec<(usize, f64)>; 3] = std::array::from_fn(|a| model.dofs.expand(NODE_DOFS * n + a));
-    for b in 0..3 {
-        for &(c, wc) in &expanded[b] {
-            for a in 0..3 {
-                for &(r, wr) in &expanded[a] {
-                    if r > c {
-                        continue;
-                    }
-                    if let Some(s) = fresh_slot(&p.col_ptr, &p.row_idx, fresh, r, c) {
-                        values[s] -= 0.5 * wr * wc * (j[(a, b)] + j[(b, a)]);
-                    }
-                }
-            }
+    super::nodal::for_each_node_entry(model, n, j, |r, c, v| {
+        if let Some(s) = fresh_slot(&p.col_ptr, &p.row_idx, fresh, r, c) {
+            values[s] -= v;
         }
-    }
+    });
 }
 
 /// [`super::nodal::add_node_pair_block`] restricted to the entries marked in `fresh` (same

@@ -131,18 +131,26 @@ fn free_translations(model: &Model, n: usize) -> Option<[usize; 3]> {
 /// Adds −½(J + Jᵀ) of node `n`'s translations to the upper-triangular CSC tangent `values`,
 /// through the tie transformation (free nodes take [`BlockSlots`], without it).
 pub(super) fn add_node_block(model: &Model, col_ptr: &[usize], row_idx: &[usize], values: &mut [f64], n: usize, j: &Matrix3<f64>) {
-    // Through the tie transformation (Tᵀ J T) when the node is a tied slave.
+    for_each_node_entry(model, n, j, |r, c, v| {
+        let rows = &row_idx[col_ptr[c]..col_ptr[c + 1]];
+        if let Ok(p) = rows.binary_search(&r) {
+            values[col_ptr[c] + p] -= v;
+        }
+    });
+}
+
+/// Visits the stored entries (row r ≤ column c) of node `n`'s block ½(J + Jᵀ) through the tie
+/// transformation (Tᵀ J T when the node is a tied slave), in a fixed order, with each entry's
+/// value; shared by [`add_node_block`] and the pattern growth's carry-over (`growth`), which
+/// must subtract the same terms in the same order.
+pub(super) fn for_each_node_entry(model: &Model, n: usize, j: &Matrix3<f64>, mut visit: impl FnMut(usize, usize, f64)) {
     let expanded: [Vec<(usize, f64)>; 3] = std::array::from_fn(|a| model.dofs.expand(NODE_DOFS * n + a));
     for b in 0..3 {
         for &(c, wc) in &expanded[b] {
             for a in 0..3 {
                 for &(r, wr) in &expanded[a] {
-                    if r > c {
-                        continue;
-                    }
-                    let rows = &row_idx[col_ptr[c]..col_ptr[c + 1]];
-                    if let Ok(p) = rows.binary_search(&r) {
-                        values[col_ptr[c] + p] -= 0.5 * wr * wc * (j[(a, b)] + j[(b, a)]);
+                    if r <= c {
+                        visit(r, c, 0.5 * wr * wc * (j[(a, b)] + j[(b, a)]));
                     }
                 }
             }
