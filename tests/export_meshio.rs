@@ -62,7 +62,8 @@ fn vtu_and_pvd_open_in_meshio_with_the_solver_numbers() {
     assert!(o.status.success(), "python failed: {}", String::from_utf8_lossy(&o.stderr));
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json from python");
     let entries = v["entries"].as_array().expect("entries");
-    assert_eq!(entries.len(), 8, "one VTU per increment in the PVD");
+    assert!(summary.increments.len() >= 2, "{} increments", summary.increments.len());
+    assert_eq!(entries.len(), summary.increments.len(), "one VTU per increment in the PVD");
     for (e, (inc, mon)) in entries.iter().zip(summary.increments.iter().zip(&summary.monitors[0].values)) {
         assert_eq!(e["points"].as_u64(), Some(built.model.n_nodes() as u64));
         assert_eq!(e["quads"].as_u64(), Some(built.model.elements.len() as u64));

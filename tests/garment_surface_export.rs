@@ -104,8 +104,11 @@ fn obj_and_glb_read_back_with_groups_vertex_counts_and_pattern_uvs() {
         let want = [0.0, 0.7, 0.2, 1.0];
         assert!(x.len() == 4 && x.iter().zip(want).all(|(a, b)| (a - b).abs() < 1e-6), "{x:?}");
     }
-    // One morph target per exported state (sew 4 + hang 2 increments), times as solved.
-    assert_eq!(v["targets"], serde_json::json!([6, 6]));
+    // One morph target per exported state (every converged increment of sew and hang), times
+    // as solved.
+    let n = summary.increments.len();
+    assert!(n >= 2);
+    assert_eq!(v["targets"], serde_json::json!([n, n]));
     assert_eq!(v["animation"], serde_json::json!(["poses"]));
     let times: Vec<f64> = summary.increments.iter().map(|r| r.time).collect();
     assert_eq!(v["pose_times"], serde_json::json!(times));

@@ -250,7 +250,8 @@ fn strip_twisted_through_720_degrees() {
 /// (h = 34.64 µm, E h = 10³ N/m, D = 10⁻⁷ N·m; ν = 0), 1 m × 0.5 m on 32×4, clamped along one
 /// short edge and folded in half by an end moment per length m = π D / L (Sze et al. 2004
 /// §3.2 scaled): the free edge lands on top of the clamped one. Analytic circle, at every
-/// one of 16 increments: −u = L(1 − sin φ/φ), w = L(1 − cos φ)/φ, φ = π·scale; within 1 %.
+/// converged increment (automatic, 16 as the first guess) up to the full fold: −u = L(1 −
+/// sin φ/φ), w = L(1 − cos φ)/φ, φ = π·scale; within 1 %.
 #[test]
 fn nearly_inextensible_sheet_folded_in_half() {
     let h: f64 = (12.0e-10f64).sqrt();
@@ -273,7 +274,7 @@ fn nearly_inextensible_sheet_folded_in_half() {
     let t = Instant::now();
     let s = bench::solve_variant(&text, "fold_in_half", &[]).unwrap_or_else(|err| panic!("{err}"));
     let wall = t.elapsed().as_secs_f64();
-    assert_eq!(s.increments.len(), 16);
+    assert!(s.increments.last().is_some_and(|r| (r.scales[0] - 1.0).abs() < 1e-12), "folded only part way");
     let mut worst: f64 = 0.0;
     for (inc, v) in s.increments.iter().zip(&s.monitors[0].values) {
         let phi = std::f64::consts::PI * inc.scales[0];

@@ -257,10 +257,10 @@ fn static_increments_move_the_body_on_the_load_fraction() {
     let text = cloth_on_plate("(time: 0.0), (time: 1.0, translation: (0.0, 0.0, 0.01))", 0.3, 0.0, 0.0)
         .replace(
             r#"kind: Dynamic((dt: 0, dt_max: 0, dt_min: 1e-6, duration: 0)))"#,
-            r#"increments: 4)"#,
+            r#"increments: 4, automatic_increments: false)"#,
         )
         .replace(r#"steps: [(name: "move", increments: 1,"#, r#"node_sets: {"centre": Nearest(point: (0.05, 0.05, 0.0))}, boundary: [Fix(set: "centre", dofs: [Ux, Uy])], steps: [(name: "move","#);
-    assert!(text.contains("increments: 4)"), "{text}");
+    assert!(text.contains("increments: 4, automatic_increments: false)"), "{text}");
     let (_, state, reports, penetration) = solve(&text);
     assert!(penetration <= 0.0, "a face entered the plate by {penetration:e} m");
     assert_eq!(reports.len(), 4);

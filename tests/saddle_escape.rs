@@ -33,7 +33,7 @@ fn perfect_plate_past_buckling_leaves_the_flat_saddle() {
             ("    imperfection: Some(BucklingModes(scale: {\"compression\": 1.0}, modes: [(mode: 1, amplitude: 1.0e-4)])),\n", String::new()),
             ("thickness: 0.01)", "thickness: 0.01, areal_density: 1.0)".to_string()),
             (
-                "steps: [(name: \"compress\", increments: 30, scale: {\"compression\": 1.5})]",
+                "steps: [(name: \"compress\", increments: 30, scale: {\"compression\": 1.5}, automatic_increments: false)]",
                 "steps: [(name: \"compress\", increments: 1, scale: {\"compression\": 1.5}, kind: Dynamic((dt: 1e-3, dt_max: 1.0, mass_damping: 40.0, max_steps: 2000)))]".to_string(),
             ),
         ],

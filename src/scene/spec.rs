@@ -532,8 +532,9 @@ pub struct StepSpec {
     pub linear: bool,
     /// Static steps: `increments` is only the first guess; increments grow after quick
     /// convergence and shrink after slow or failed ones (divergence detected early), results
-    /// at every converged increment. Default false: exactly `increments` equal load levels.
-    #[serde(default)]
+    /// at every converged increment (the default). `false`: exactly `increments` equal load
+    /// levels (a curve sampled where a reference is tabulated).
+    #[serde(default = "automatic_default")]
     pub automatic_increments: bool,
     /// Scale of each load pattern at the end of the step; unnamed patterns keep the value
     /// they had at the end of the previous step.
@@ -594,4 +595,8 @@ impl Default for OutputSpec {
     fn default() -> Self {
         Self { every: 1, vtu: true, binary: true, plot_against: None }
     }
+}
+
+fn automatic_default() -> bool {
+    true
 }

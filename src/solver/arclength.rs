@@ -256,7 +256,7 @@ impl<'m> Solver<'m> {
                         let arc_state = std::mem::replace(state, saved.clone());
                         let target = (lambda + dlam).signum() * max_load_factor;
                         let mut report = |it: usize, res: f64| progress(&Progress { step: si, fraction: frac, iteration: it, residual: res });
-                        match self.attempt(state, &scales_at(target), false, false, &mut report) {
+                        match self.attempt(state, &scales_at(target), false, None, &mut report) {
                             Attempt::Converged { iterations: k, residuals: r, indefinite: ind, energy: e } => {
                                 iterations += k;
                                 (its, residuals, energy, indefinite, dlam) = (k, r, e, indefinite || ind, target - lambda);

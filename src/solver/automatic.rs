@@ -59,6 +59,10 @@ impl Solver<'_> {
         let mut indefinite = false;
         // The previous converged state and its load level, for the extrapolating predictor.
         let mut previous: Option<(State, f64)> = None;
+        // The step's time-averaged force scale (mean over its converged increments) and the
+        // force scale of the current attempt ([`Solver::attempt`]).
+        let (mut force_sum, mut converged) = (0.0, 0usize);
+        let mut force_scale = (0.0, 0.0);
         loop {
             let next = if tau + dtau >= 1.0 - 1e-9 { 1.0 } else { tau + dtau };
             let trial_scales = at(next);
@@ -70,8 +74,11 @@ impl Solver<'_> {
             let mut report_progress = |it: usize, res: f64| progress(&Progress { step: si, fraction: next, iteration: it, residual: res });
             self.begin_nodal_increment((next - tau) * step.increments.max(1) as f64);
             self.begin_nodal_motion(step.static_clock(clock0, next), state);
-            match self.attempt(state, &trial_scales, false, true, &mut report_progress) {
+            force_scale.0 = if converged > 0 { force_sum / converged as f64 } else { 0.0 };
+            match self.attempt(state, &trial_scales, false, Some(&mut force_scale), &mut report_progress) {
                 Attempt::Converged { iterations: its, residuals, indefinite: ind, energy } => {
+                    force_sum += force_scale.1;
+                    converged += 1;
                     iterations += its;
                     indefinite |= ind;
                     tau = next;

@@ -447,8 +447,11 @@ impl<'m> Solver<'m> {
     }
 
     /// Newton iterations for one increment ending at `scales`, starting from `state`.
-    /// With `early_exit` (automatic increments) the attempt stops as soon as divergence shows.
-    pub(super) fn attempt(&mut self, state: &mut State, scales: &[f64], linear: bool, early_exit: bool, progress: &mut dyn FnMut(usize, f64)) -> Attempt {
+    /// With `automatic` (automatic increments) the attempt stops as soon as divergence shows,
+    /// and its force scale is at least the step's time-averaged force scale `automatic.0`
+    /// (see below); the force scale it used is left in `automatic.1`.
+    pub(super) fn attempt(&mut self, state: &mut State, scales: &[f64], linear: bool, mut automatic: Option<&mut (f64, f64)>, progress: &mut dyn FnMut(usize, f64)) -> Attempt {
+        let early_exit = automatic.is_some();
         let n = self.model.dofs.n_free;
         let mut r = vec![0.0; n];
         let mut du = vec![0.0; n];
@@ -466,11 +469,21 @@ impl<'m> Solver<'m> {
         // is a floor for the later ones, so that an increment whose forces vanish at the
         // solution (a seam closing by a rigid motion, an unloading to zero) still measures
         // its residual against the forces it had to balance (the time-averaged force of
-        // general-purpose FE codes), not against round-off.
+        // general-purpose FE codes), not against round-off. Automatic increments start from an
+        // extrapolated state whose forces may all but balance (a seam closed by a rigid slide:
+        // nothing but round-off is left to measure), so their floor is also the mean force scale
+        // of the step's converged increments (the time-averaged force of Abaqus, §7.2.3 of its
+        // Analysis User's Guide).
         let mut force_scale = None;
         for it in 0..self.settings.max_iterations {
             let (rel_now, reference) = self.residual(&mut r);
-            let floor = *force_scale.get_or_insert(reference);
+            let floor = *force_scale.get_or_insert_with(|| match automatic.as_deref_mut() {
+                Some(scale) => {
+                    scale.1 = reference;
+                    reference.max(scale.0)
+                }
+                None => reference,
+            });
             let rel = rel_now * reference / reference.max(floor);
             residuals.push(rel);
             progress(it, rel);
@@ -535,7 +548,7 @@ impl<'m> Solver<'m> {
                     return failed(it, &residuals, el, format!("increment too large: the first Newton correction turns a director by {turn:.2} rad"));
                 }
                 let n_r = residuals.len();
-                if n_r >= 4 && residuals[n_r - 1] > residuals[n_r - 2] && residuals[n_r - 2] > residuals[n_r - 3] {
+                if n_r >= 4 && residuals[n_r - 1] > residuals[n_r - 2] && residuals[n_r - 2] > residuals[n_r - 3] && residuals[n_r - 1] > residuals[0] {
                     let el = self.worst_element(&r);
                     return failed(it, &residuals, el, "Newton diverging (residual grew in two successive iterations)".into());
                 }
@@ -658,7 +671,7 @@ impl<'m> Solver<'m> {
                     self.begin_nodal_motion(step.static_clock(clock0, next), state);
                     let outcome = match step.kind {
                         StepKind::StaticDamped => self.attempt_damped(state, &trial_scales, &mut report_progress),
-                        _ => self.attempt(state, &trial_scales, step.linear, false, &mut report_progress),
+                        _ => self.attempt(state, &trial_scales, step.linear, None, &mut report_progress),
                     };
                     match outcome {
                         Attempt::Converged { iterations: its, residuals, indefinite: ind, energy } => {
