@@ -291,6 +291,14 @@ pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &m
                 problems.push(format!("{}_garment.glb: {poses_dropped} later states left out of the pose series (at most {MAX_POSE_VERTICES} vertex positions are kept)", scene.name));
             }
             if let Some(layout) = &built.garment {
+                // A picture of the final (or last converged) state on its bodies.
+                let bodies: Vec<_> = built.contact.iter().flat_map(|c| &c.bodies).map(|b| b.at_time(solver.clock())).collect();
+                let pic = crate::garment::picture::garment_picture(model, &state, Some(layout), &built.seams, &bodies, PICTURE_SIZE);
+                let name = format!("{}.png", scene.name);
+                match crate::io::png::write_png(&dir.join(&name), pic.width, pic.height, &pic.rgb) {
+                    Ok(()) => summary.files.push(name),
+                    Err(e) => problems.push(format!("{name}: {e}")),
+                }
                 for (name, e) in write_surfaces(dir, &scene.name, model, &state, layout, &poses) {
                     match e {
                         None => summary.files.push(name),
