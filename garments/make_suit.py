@@ -82,12 +82,12 @@ UC = 0.08                     # crotch curve's width
 ARMHOLE_DROP = 0.03           # the armpit this far below the body's (room under the arm)
 VA = 1.29 - ARMHOLE_DROP - LUMBAR_Z  # armpit (top of the side seam)
 UNDERARM = 0.06               # each half of the underarm gusset's top edge
-# Neckline: a collar of 0.51 m round the neck (girth 0.39 m), its centre front at 1.465 m and
+# Neckline: a collar of 0.46 m round the neck (girth 0.39 m), its centre front at 1.465 m and
 # centre back at 1.505 m (the jugular notch and the seventh vertebra's height with ease).
 NECK_W = 0.09                 # neck opening half-width at the shoulder line
 VNF = 0.40                    # neck point at the centre front
 VNB = 0.44                    # neck point at the centre back
-NECK_INNER = 0.03             # back neckline part sewn to the hood's back gusset
+NECK_INNER = 0.05             # back neckline part sewn to the hood's back gusset
 
 ua_dx = math.sqrt(UNDERARM ** 2 - 0.01 ** 2)
 p_under = (W - ua_dx, VA + 0.01)
@@ -251,7 +251,7 @@ ankle = Panel("ankle_cuff_l", [
 C_HOOD = 0.03
 HV_BOT = 1.51 - HEAD_Z
 HV_TOP = 1.85 - HEAD_Z
-GUS_HALF = 0.03
+GUS_HALF = 0.05
 HV_GUS = 1.66 - HEAD_Z
 hood_back = Panel("hood_back", [
     (0.0, HV_BOT), (GUS_HALF, HV_BOT), (2 * GUS_HALF, HV_BOT), (2 * GUS_HALF, HV_GUS), (GUS_HALF, HV_GUS + 0.04), (0.0, HV_GUS),
@@ -261,12 +261,12 @@ side_len = hood_back.edge_length("side_l")
 neck_front = front_l.edge_length("neck")
 neck_back = back_l.edge_length("neck_outer")
 HOOD_W = neck_front + neck_back + 0.04
-# The hood sides sit this far forward of the back gusset (gaps of 0.10-0.12 m there to sew):
-# the head's shell is ~0.8 m round, the hood 0.59 m, and with the sides placed against the
+# The hood sides sit this far forward of the back gusset (gaps of up to 0.12 m there to sew):
+# the head's shell is ~0.8 m round, the hood 0.54 m, and with the sides placed against the
 # gusset their neck corners started at the sides of the head and crossed the front quarters'
 # neck flaps on their way to the centre front (the two panels' prisms overlapped there for
 # ten time steps of the sewing).
-HOOD_FORWARD = 0.08
+HOOD_FORWARD = 0.06
 u0 = HOOD_W - neck_front - neck_back
 hood_l = Panel("hood_l", [
     (u0, HV_BOT), (u0 + neck_front, HV_BOT), (HOOD_W, HV_BOT), (HOOD_W, HV_BOT + side_len),

@@ -105,8 +105,8 @@ fn bad_arrangement_points_are_located() {
 }
 
 /// The coarse suit (the scene file as shipped: laminated plies, element size 0.1 m) sewn
-/// shut and draped to rest on the mannequin (316 time steps, 1475 Newton iterations; about
-/// 35 s CPU).
+/// shut and draped to rest on the mannequin (157 time steps, 849 Newton iterations; about
+/// 20 s CPU).
 #[test]
 fn nbc_suit_is_sewn_and_rests_on_the_mannequin() {
     let text = std::fs::read_to_string(SUIT).expect("garments/nbc_suit.ron");
