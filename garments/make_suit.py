@@ -76,21 +76,32 @@ def pt(p):
 # (lumbar joint) up), from below the crotch at the centre lines to the shoulders.
 C_TRUNK = 0.03
 W = 0.28                      # quarter width (hip girth 1.00 + 0.12 ease) / 4
-VB = 0.86 - LUMBAR_Z          # bottom at the sides
-CROTCH_DROP = 0.10            # the centre front/back runs down between the legs (rise)
+VB = 0.82 - LUMBAR_Z          # bottom at the sides (the thigh pieces start 0.10 m below the hip)
+CROTCH_DROP = 0.12            # the centre front/back runs down between the legs (rise)
 UC = 0.08                     # crotch curve's width
-VA = 1.29 - LUMBAR_Z          # armpit (top of the side seam)
-UNDERARM = 0.04               # each half of the underarm gusset's top edge
-ARMHOLE = 0.16                # each half of the sleeve cap
-NECK_W = 0.085                # neck opening half-width at the shoulder line
-VNF = 0.33                    # neck point at the centre front
-VNB = 0.37                    # neck point at the centre back
-NECK_INNER = 0.03             # back neckline part sewn to the hood's back gusset
+ARMHOLE_DROP = 0.03           # the armpit this far below the body's (room under the arm)
+VA = 1.29 - ARMHOLE_DROP - LUMBAR_Z  # armpit (top of the side seam)
+UNDERARM = 0.06               # each half of the underarm gusset's top edge
+# Neckline: a collar of 0.46 m round the neck (girth 0.39 m), its centre front at 1.465 m and
+# centre back at 1.505 m (the jugular notch and the seventh vertebra's height with ease).
+NECK_W = 0.09                 # neck opening half-width at the shoulder line
+VNF = 0.40                    # neck point at the centre front
+VNB = 0.44                    # neck point at the centre back
+NECK_INNER = 0.05             # back neckline part sewn to the hood's back gusset
 
 ua_dx = math.sqrt(UNDERARM ** 2 - 0.01 ** 2)
 p_under = (W - ua_dx, VA + 0.01)
-p_sh = (W - 0.10, p_under[1] + math.sqrt(ARMHOLE ** 2 - (p_under[0] - (W - 0.10)) ** 2))
-VS = p_sh[1]
+# The shoulder line. The quarters stand on the trunk's elliptic shell ~0.16 m in front of and
+# behind the body's mid-plane, and the shoulder (flat-topped at 1.47-1.48 m, ±0.07-0.10 m
+# deep) lies between them: each quarter needs a flap E_SH above the line it used to end at
+# (1.448 m) to reach a shoulder seam on top of the shoulder without pulling the whole suit
+# up (drawn without the flaps, the sewn suit was stretched 6-8 % along the trunk and lifted
+# 4-7 cm). The armhole runs from the underarm straight up to the flap's outer corner.
+VS = (1.29 - LUMBAR_Z) + 0.01 + math.sqrt(0.16 ** 2 - (0.10 - math.sqrt(0.04 ** 2 - 0.01 ** 2)) ** 2)
+E_SH = 0.10                   # shoulder flaps: over the shoulder to a seam on its top
+VS += E_SH
+p_sh = (W - 0.06, VS)
+ARMHOLE = math.hypot(p_sh[0] - p_under[0], p_sh[1] - p_under[1])  # each half of the sleeve cap
 
 
 def trunk_left(front):
@@ -137,14 +148,24 @@ C_ARM = 0.025
 V_CAP = -0.11
 V_GUS = V_CAP - 0.06
 V_EL = -(UPPER_ARM - 0.02)
-TOP_CAP = 2 * ARMHOLE         # top sleeve's cap width (sewn to the front and back armholes)
-TOP_W = 0.21                  # top sleeve below the gusset
+TOP_CAP = 0.365               # top sleeve's cap base width (with the gusset's top: 0.485 m round)
+# The cap: each half a steep segment up from the cap base and a shallow one (CROWN_SLOPE
+# from the horizontal, CROWN_W wide) to the crown, so that each half is as long as its
+# armhole (0.278 m) and the crown is blunt: 130°, where it meets the two shoulder flaps'
+# 90° corners. A pointed crown (one straight segment per half, 75°) folded its corner
+# element at the end of the sewing and again at rest.
+CROWN_W, CROWN_SLOPE = 0.08, math.radians(25.0)
+crown_len = CROWN_W / math.cos(CROWN_SLOPE)
+CAP_H = CROWN_W * math.tan(CROWN_SLOPE) + math.sqrt((ARMHOLE - crown_len) ** 2 - (TOP_CAP / 2 - CROWN_W) ** 2)
 UNDER_W = 0.19                # under sleeve / gusset bottom
 GUS_TOP = 2 * UNDERARM
+TOP_W = TOP_CAP - UNDER_W + GUS_TOP  # top sleeve below the gusset (its sides as long as the gusset's)
 s = (TOP_CAP - TOP_W) / 2
 top_upper = Panel("sleeve_top_upper_l", [
-    (s, V_EL), (s + TOP_W, V_EL), (s + TOP_W, V_GUS), (TOP_CAP, V_CAP), (TOP_CAP / 2, V_CAP), (0.0, V_CAP), (s, V_GUS),
-], {"elbow": (0, 1), "back_low": (1, 2), "back_high": (2, 3), "cap_back": (3, 4), "cap_front": (4, 5), "front_high": (5, 6), "front_low": (6, 0)},
+    (s, V_EL), (s + TOP_W, V_EL), (s + TOP_W, V_GUS), (TOP_CAP, V_CAP),
+    (TOP_CAP / 2 + CROWN_W, V_CAP + CAP_H - CROWN_W * math.tan(CROWN_SLOPE)), (TOP_CAP / 2, V_CAP + CAP_H),
+    (TOP_CAP / 2 - CROWN_W, V_CAP + CAP_H - CROWN_W * math.tan(CROWN_SLOPE)), (0.0, V_CAP), (s, V_GUS),
+], {"elbow": (0, 1), "back_low": (1, 2), "back_high": (2, 3), "cap_back": (3, 5), "cap_front": (5, 7), "front_high": (7, 8), "front_low": (8, 0)},
     "upper_arm_l.outer", (TOP_CAP / 2, 0.0), 0.0, C_ARM)
 g = (UNDER_W - GUS_TOP) / 2
 gusset = Panel("gusset_l", [
@@ -159,7 +180,8 @@ under_upper = Panel("sleeve_under_upper_l", [
 C_FORE = 0.03
 VF_TOP = -0.01
 VF_BOT = -0.20
-TOP_WRIST, UNDER_WRIST = 0.16, 0.14
+UNDER_WRIST = 0.14
+TOP_WRIST = TOP_W - UNDER_W + UNDER_WRIST  # equal tapers: the forearm seams' sides agree
 d = (TOP_W - TOP_WRIST) / 2
 top_fore = Panel("sleeve_top_fore_l", [
     (d, VF_BOT), (d + TOP_WRIST / 2, VF_BOT), (d + TOP_WRIST, VF_BOT), (TOP_W, VF_TOP), (0.0, VF_TOP),
@@ -184,7 +206,7 @@ cuff = Panel("cuff_l", [
 # Legs (left; right mirrored): outer and inner thigh pieces, outer and inner shank pieces,
 # ankle cuff. Thigh: v from the hip joint.
 C_LEG = 0.025
-VT_TOP = -0.14
+VT_TOP = -0.10
 VT_BOT = -(HIP_Z - KNEE_Z) + 0.015
 crotch_len = front_l.edge_length("crotch")
 leg_len = front_l.edge_length("leg")
@@ -228,8 +250,8 @@ ankle = Panel("ankle_cuff_l", [
 # seams close over the head; the neck edge is sewn to the trunk's neckline.
 C_HOOD = 0.03
 HV_BOT = 1.51 - HEAD_Z
-HV_TOP = 1.80 - HEAD_Z
-GUS_HALF = 0.03
+HV_TOP = 1.85 - HEAD_Z
+GUS_HALF = 0.05
 HV_GUS = 1.66 - HEAD_Z
 hood_back = Panel("hood_back", [
     (0.0, HV_BOT), (GUS_HALF, HV_BOT), (2 * GUS_HALF, HV_BOT), (2 * GUS_HALF, HV_GUS), (GUS_HALF, HV_GUS + 0.04), (0.0, HV_GUS),
@@ -238,13 +260,19 @@ hood_back = Panel("hood_back", [
 side_len = hood_back.edge_length("side_l")
 neck_front = front_l.edge_length("neck")
 neck_back = back_l.edge_length("neck_outer")
-HOOD_W = 0.24
+HOOD_W = neck_front + neck_back + 0.04
+# The hood sides sit this far forward of the back gusset (gaps of up to 0.12 m there to sew):
+# the head's shell is ~0.8 m round, the hood 0.54 m, and with the sides placed against the
+# gusset their neck corners started at the sides of the head and crossed the front quarters'
+# neck flaps on their way to the centre front (the two panels' prisms overlapped there for
+# ten time steps of the sewing).
+HOOD_FORWARD = 0.06
 u0 = HOOD_W - neck_front - neck_back
 hood_l = Panel("hood_l", [
     (u0, HV_BOT), (u0 + neck_front, HV_BOT), (HOOD_W, HV_BOT), (HOOD_W, HV_BOT + side_len),
     (HOOD_W - 0.04, HV_TOP), (0.02, HV_TOP), (0.0, 0.05),
 ], {"neck_front": (0, 1), "neck_back": (1, 2), "back_low": (2, 3), "back_high": (3, 4), "crown": (4, 5)},
-    "head.back", (HOOD_W + 0.015 + GUS_HALF, 0.0), 0.0, C_HOOD)
+    "head.back", (HOOD_W + 0.015 + GUS_HALF + HOOD_FORWARD, 0.0), 0.0, C_HOOD)
 hood_r = hood_l.mirrored("hood_r", "head.back")
 
 left = [top_upper, gusset, under_upper, top_fore, under_fore, cuff, thigh_outer, thigh_inner, shank_outer, shank_inner, ankle]

@@ -98,7 +98,7 @@ fn arc_fractions(x: &[Vector3<f64>], row: &[usize]) -> Vec<f64> {
 /// Dual mortar weights (see the module doc) of each slave node on the master row, rows
 /// parametrised by normalised arc length `ss` (slave) and `sm` (master); weights below
 /// 1e-12 are dropped and one within `snap` of 1 is snapped, so matching nodes get a single
-/// master of weight 1.
+/// master of weight 1; the rows' end nodes are point ties ([`point_tie_row_ends`]).
 fn mortar_weights(master: &[usize], sm: &[f64], ss: &[f64], snap: f64) -> Vec<Vec<(usize, f64)>> {
     let (nm, ns) = (master.len(), ss.len());
     if nm == 1 {
@@ -142,16 +142,47 @@ fn mortar_weights(master: &[usize], sm: &[f64], ss: &[f64], snap: f64) -> Vec<Ve
             }
         }
     }
-    m.iter()
-        .zip(&d)
-        .map(|(row, &ds)| {
-            let w: Vec<(usize, f64)> = row.iter().enumerate().filter(|(_, v)| v.abs() > 1e-12 * ds).map(|(k, v)| (master[k], v / ds)).collect();
+    let mut w: Vec<Vec<f64>> = m.iter().zip(&d).map(|(row, &ds)| row.iter().map(|v| if ds > 0.0 { v / ds } else { 0.0 }).collect()).collect();
+    point_tie_row_ends(&mut w, &d);
+    w.iter()
+        .map(|row| {
+            let w: Vec<(usize, f64)> = row.iter().enumerate().filter(|(_, v)| v.abs() > 1e-12).map(|(k, &v)| (master[k], v)).collect();
             match w.iter().find(|(_, v)| (v - 1.0).abs() <= snap) {
                 Some(&(n, _)) => vec![(n, 1.0)],
                 None => w,
             }
         })
         .collect()
+}
+
+/// Makes the slave row's end nodes point ties on the master row's end nodes (weight 1),
+/// so that seams meeting at a row end close exactly there (a tie whose slave is already
+/// taken is dropped as redundant, and a dual-mortar end weight of, say, 0.93 instead of 1
+/// left the dropped tie's seam open by the other weights times the deformation: 1.2 mm on
+/// the suit's underarm). The end's change of weight, Δw_0m = δ_m0 − w_0m, is moved to its
+/// neighbour with the ratio of their tributary lengths, w_1m −= (d_0/d_1) Δw_0m, so that
+/// the fold Σ_s w_sm d_s of a uniform slave traction onto the master nodes is unchanged;
+/// Σ_m Δw_0m = 0 and Σ_m Δw_0m s_m = 0 (both rows start at s = 0), so the neighbour still
+/// reproduces constant and linear fields. Rows of fewer than three slave nodes are left as
+/// they are (no neighbour to take the share).
+fn point_tie_row_ends(w: &mut [Vec<f64>], d: &[f64]) {
+    let ns = w.len();
+    if ns < 3 {
+        return;
+    }
+    let nm = w[0].len();
+    for (end, next, m_end) in [(0, 1, 0), (ns - 1, ns - 2, nm - 1)] {
+        if d[next] <= 0.0 {
+            continue;
+        }
+        let ratio = d[end] / d[next];
+        for k in 0..nm {
+            let target = if k == m_end { 1.0 } else { 0.0 };
+            let change = target - w[end][k];
+            w[next][k] -= ratio * change;
+            w[end][k] = target;
+        }
+    }
 }
 
 /// Half-segment (tributary) lengths of the nodes of a row.
@@ -345,7 +376,7 @@ mod tests {
     /// non-matching, the slave graded: they reproduce constant and linear fields exactly,
     /// and fold the consistent nodal forces of a uniform traction on the slave row onto the
     /// consistent nodal forces of the master row (the patch test); matching rows get the
-    /// identity.
+    /// identity, and the rows' end nodes are point ties.
     #[test]
     fn mortar_weights_pass_the_patch_test() {
         for (n_master, n_slave) in [(3, 5), (4, 3), (5, 7), (3, 3)] {
@@ -376,6 +407,9 @@ mod tests {
             if n_master == n_slave {
                 assert!(info.weights.iter().enumerate().all(|(k, w)| w == &vec![(k, 1.0)]));
             }
+            // Row ends are point ties on the master row's ends (seam junctions close exactly).
+            assert_eq!(info.weights[0], vec![(0, 1.0)]);
+            assert_eq!(info.weights[n_slave - 1], vec![(n_master - 1, 1.0)]);
         }
     }
 }
