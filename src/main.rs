@@ -13,10 +13,14 @@ use plyshell::scene::{self, Scene};
 use plyshell::solver::Progress;
 use plyshell::{bench, scene::BuiltScene};
 
-/// The bundled default scene solved by `plyshell demo`: the three-ply NBC sleeve garment.
-const DEMO_SCENE: &str = include_str!("../garments/nbc_sleeve.ron");
-/// The name the bundled demo scene's messages carry.
-const DEMO_NAME: &str = "garments/nbc_sleeve.ron (bundled)";
+/// The bundled default scene solved by `plyshell demo`: the coarse NBC coverall sewn shut
+/// round the mannequin and draped to rest.
+const DEMO_SCENE: &str = include_str!("../garments/nbc_suit.ron");
+/// The name the bundled demo scene's messages carry; its mannequin files (measurements and
+/// pose, relative to the scene) are read from the source tree's `garments/`.
+const DEMO_NAME: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/garments/nbc_suit.ron");
+/// The demo writes a VTU every this many time steps (and the last).
+const DEMO_OUTPUT_EVERY: usize = 10;
 
 #[derive(Parser)]
 #[command(name = "plyshell", version, about = "Nonlinear shell finite elements for layered protective garments")]
@@ -202,6 +206,8 @@ fn main() -> ExitCode {
             .map_err(|e| e.to_string())
             .and_then(|(s, b)| solve(&s, &b, &out, quiet)),
         Command::Demo { out } => scene::parse(DEMO_NAME, DEMO_SCENE)
+            // Every tenth time step of the ~160 to rest is enough to watch the sewing.
+            .map(|s| Scene { output: scene::OutputSpec { every: s.output.every.max(DEMO_OUTPUT_EVERY), ..s.output.clone() }, ..s })
             .and_then(|s| scene::build(&s, DEMO_NAME, DEMO_SCENE).map(|b| (s, b)))
             .map_err(|e| e.to_string())
             .and_then(|(s, b)| solve(&s, &b, &out, false)),
