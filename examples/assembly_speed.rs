@@ -12,7 +12,7 @@
 //! the share of tangents the Cholesky test passes, the mean number of eigenvalues mirrored
 //! and the largest difference between the two. (The patch's strongly deformed tangents have
 //! eight negative eigenvalues each; those of the projected iterations of a sheet dropped
-//! onto a sphere 2.6, where the projection takes 7.1 µs against nalgebra's 12.3.)
+//! onto a sphere 2.6, where the projection takes 6.6 µs against nalgebra's 12.3.)
 //!
 //! `cargo run --release --example assembly_speed -- SCENE.ron [REPEATS]`: seconds per
 //! global assembly (element evaluation + scatter) of a scene's model in a deformed state,

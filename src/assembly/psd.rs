@@ -11,7 +11,7 @@
 //!    Bowdler, Martin, Reinsch & Wilkinson, Numer. Math. 11, 1968), accurate to round-off
 //!    of ‖K‖;
 //! 3. for each eigenvalue below −ε·m (m the largest diagonal entry of K, ε =
-//!    [`PSD_TOLERANCE`]) its eigenvector of T by three steps of inverse iteration on the
+//!    [`PSD_TOLERANCE`]) its eigenvector of T by two steps of inverse iteration on the
 //!    tridiagonal LU factors with partial pivoting, orthogonalised against the vectors found
 //!    before (as LAPACK's `dstein`, so clustered or repeated eigenvalues get an orthonormal
 //!    basis), carried back by the reflectors: v = Q y.
@@ -38,10 +38,11 @@ pub const PSD_TOLERANCE: f64 = 1e-12;
 /// solver of nalgebra takes over); two or three are the rule.
 const MAX_SWEEPS: usize = 60;
 
-/// Inverse iteration steps per negative eigenvalue: each multiplies the error components
-/// by (round-off of ‖K‖)/(gap to the other eigenvalues), so three leave an error below
-/// round-off for any gap (components of eigenvalues closer than round-off are harmless).
-const INVERSE_STEPS: usize = 3;
+/// Inverse iteration steps per negative eigenvalue: each multiplies the components along
+/// the other eigenvectors by (round-off of ‖K‖)/(gap g to their eigenvalues), and such a
+/// component changes the result by about g times itself, so after two steps the error is
+/// below g·(u‖K‖/g)² ≤ u‖K‖ for any gap g ≥ u‖K‖ (closer eigenvalues are harmless).
+const INVERSE_STEPS: usize = 2;
 
 /// Which way [`project_psd_traced`] obtained its result.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -97,16 +98,16 @@ fn project_kernel(k: &ElemMat) -> (ElemMat, Projection) {
     if cholesky_succeeds(&a, threshold) {
         return (sym, Projection::Definite);
     }
-    let Some((lambda, v)) = negative_eigenpairs(&a, -threshold) else {
+    let Some((count, lambda, v)) = negative_eigenpairs(&a, -threshold) else {
         let e = nalgebra::SymmetricEigen::new(sym);
         let mirrored = e.eigenvalues.map(f64::abs);
         return (&e.eigenvectors * nalgebra::Matrix::from_diagonal(&mirrored) * e.eigenvectors.transpose(), Projection::Fallback);
     };
-    if lambda.is_empty() {
+    if count == 0 {
         return (sym, Projection::Mirrored);
     }
     // K + 2 Σ_{λ<0} |λ| v vᵀ, built on the rows of the symmetric part.
-    for (l, vi) in lambda.iter().zip(&v) {
+    for (l, vi) in lambda[..count].iter().zip(&v[..count]) {
         let w = -2.0 * l;
         for (row, &vr) in a.iter_mut().zip(vi) {
             let s = w * vr;
@@ -350,11 +351,12 @@ impl ShiftedLu {
     }
 }
 
-/// The eigenvalues of the symmetric `a` below `below` (≤ 0) and orthonormal eigenvectors
-/// (element i of the second vector belongs to λ_i), by the steps of the module doc; None if
-/// the QL iteration does not converge or the input is not finite.
+/// The number k of eigenvalues of the symmetric `a` below `below` (≤ 0), those eigenvalues
+/// (the first k entries, ascending) and orthonormal eigenvectors (the first k rows: row i
+/// belongs to λ_i), by the steps of the module doc; None if the QL iteration does not
+/// converge or the input is not finite.
 #[inline(always)]
-fn negative_eigenpairs(a: &Square, below: f64) -> Option<(Vec<f64>, Vec<[f64; N]>)> {
+fn negative_eigenpairs(a: &Square, below: f64) -> Option<(usize, [f64; N], Square)> {
     if a.iter().flatten().any(|x| !x.is_finite()) {
         return None;
     }
@@ -371,7 +373,7 @@ fn negative_eigenpairs(a: &Square, below: f64) -> Option<(Vec<f64>, Vec<[f64; N]
     let count = lambda.iter().take_while(|&&l| l < below).count();
     let norm = (0..N).map(|i| d[i].abs() + e[i].abs() + if i > 0 { e[i - 1].abs() } else { 0.0 }).fold(0.0, f64::max);
     let tiny = f64::EPSILON * norm.max(f64::MIN_POSITIVE);
-    let mut vectors: Vec<[f64; N]> = Vec::with_capacity(count);
+    let mut vectors: Square = [[0.0; N]; N];
     let mut previous = f64::NEG_INFINITY;
     for (j, &l) in lambda[..count].iter().enumerate() {
         // Shifts of (nearly) equal eigenvalues are separated by ten ulps (LAPACK `dstein`).
@@ -384,7 +386,7 @@ fn negative_eigenpairs(a: &Square, below: f64) -> Option<(Vec<f64>, Vec<[f64; N]
             let scale = 1.0 / y.iter().fold(0.0, |s: f64, x| s.max(x.abs()));
             y.iter_mut().for_each(|x| *x *= scale);
             lu.solve(&mut y);
-            for v in &vectors {
+            for v in &vectors[..j] {
                 let c: f64 = v.iter().zip(&y).fold(0.0, |s, (p, q)| s + p * q);
                 y.iter_mut().zip(v).for_each(|(q, p)| *q -= c * p);
             }
@@ -394,10 +396,10 @@ fn negative_eigenpairs(a: &Square, below: f64) -> Option<(Vec<f64>, Vec<[f64; N]
             return None;
         }
         y.iter_mut().for_each(|x| *x /= n2);
-        vectors.push(y);
+        vectors[j] = y;
     }
     // Back to the coordinates of a: v = H₀ (H₁ (⋯ H_{n−3} y)).
-    for y in &mut vectors {
+    for y in &mut vectors[..count] {
         for k in (0..N - 2).rev() {
             if betas[k] != 0.0 {
                 let v = &vs[k];
@@ -406,7 +408,7 @@ fn negative_eigenpairs(a: &Square, below: f64) -> Option<(Vec<f64>, Vec<[f64; N]
             }
         }
     }
-    Some((lambda[..count].to_vec(), vectors))
+    Some((count, lambda, vectors))
 }
 
 #[cfg(test)]
