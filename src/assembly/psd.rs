@@ -51,7 +51,8 @@ pub enum Projection {
     Definite,
     /// Eigenvalues computed; those below −ε·m were mirrored (none, possibly).
     Mirrored,
-    /// The QL iteration did not converge: nalgebra's `SymmetricEigen` and V|Λ|Vᵀ were used.
+    /// The QL iteration did not converge: nalgebra's `SymmetricEigen` and V|Λ|Vᵀ were
+    /// used; or the tangent has a non-finite entry and is returned as it is.
     Fallback,
 }
 
@@ -93,6 +94,11 @@ fn project_kernel(k: &ElemMat) -> (ElemMat, Projection) {
         }
     }
     let sym = ElemMat::from_fn(|i, j| a[j][i]);
+    if a.iter().flatten().any(|x| !x.is_finite()) {
+        // Nothing to project (and no eigensolver terminates on it): the assembled tangent
+        // carries the non-finite entries to the solver, which reports them.
+        return (sym, Projection::Fallback);
+    }
     let max_diag = (0..N).map(|i| a[i][i]).fold(0.0, f64::max);
     let threshold = PSD_TOLERANCE * max_diag;
     if cholesky_succeeds(&a, threshold) {
@@ -492,9 +498,13 @@ mod tests {
     }
 
     /// A diagonal matrix and the zero matrix take the shortcut exactly; a matrix with one
-    /// negative diagonal entry comes back with it mirrored.
+    /// negative diagonal entry comes back with it mirrored; a NaN entry comes back as it is.
     #[test]
     fn diagonal_matrices_are_mirrored_exactly() {
+        let mut bad = ElemMat::identity();
+        bad[(2, 5)] = f64::NAN;
+        let (p, way) = project_psd_traced(&bad);
+        assert!(way == Projection::Fallback && p[(2, 5)].is_nan() && p[(0, 0)] == 1.0);
         let mut k = ElemMat::from_diagonal(&nalgebra::SVector::<f64, N>::from_fn(|i, _| 1.0 + i as f64));
         assert_eq!(project_psd_traced(&k), (k, Projection::Definite));
         assert_eq!(project_psd(&ElemMat::zeros()), ElemMat::zeros());
