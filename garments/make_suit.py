@@ -19,8 +19,10 @@ left-hand ones.
 
 Usage: python3 garments/make_suit.py [OUT.ron] [--element-size H] [--discrete]
                                      [--protocol MOTION] [--side-back D]
-(--protocol body/suit_motion.ron: the mannequin moves through that motion file after the
-drape, one step to rest per frame: garments/nbc_suit_protocol.ron.)
+                                     [--fine-underarm H]
+(--protocol body/suit_motion.ron --fine-underarm 0.04: the mannequin moves through that
+motion file after the drape, one step to rest per frame, with the under sleeves and gussets
+meshed at 4 cm: garments/nbc_suit_protocol.ron.)
 """
 
 import math
@@ -112,6 +114,11 @@ ARMHOLE = math.hypot(p_sh[0] - p_under[0], p_sh[1] - p_under[1])  # each half of
 # bottom (the front quarters D wider at the leg seam, the back quarters D narrower; the armpit
 # end unchanged), so that it leaves the line down the side of the trunk; the outer thigh
 # pieces' top split moves with it (0 in garments/nbc_suit.ron).
+# Under the arm (--fine-underarm H, garments/nbc_suit_protocol.ron): the under sleeves of the
+# upper arms and the underarm gussets meshed at H instead of the garment's element size. When
+# the arm moves against the trunk the under sleeve folds; at 0.1 m (67-79 mm elements) the fold
+# forms inside one element (the laminate's bending length is 61.5 mm) and the solve stops.
+FINE_UNDERARM = float(sys.argv[sys.argv.index("--fine-underarm") + 1]) if "--fine-underarm" in sys.argv else 0.0
 SIDE_BACK = float(sys.argv[sys.argv.index("--side-back") + 1]) if "--side-back" in sys.argv else 0.0
 
 
@@ -410,6 +417,8 @@ def ron(element_size, discrete, protocol=None, name="nbc_suit", body="body"):
         w("// three plies (classical lamination theory); the quilting lines vanish. Switch to the")
         w("// discrete three-ply model with `ply_model: Discrete` (or `python3 garments/make_suit.py")
         w("// OUT.ron --discrete`).")
+    if FINE_UNDERARM:
+        w(f"// Under the arm: the under sleeves of the upper arms and the gussets meshed at {f(FINE_UNDERARM)} m (--fine-underarm).")
     if SIDE_BACK != 0.0:
         w(f"// Seam layout: the trunk's side seams swept back {f(SIDE_BACK)} m at their bottom (--side-back).")
     w(f"// Element size {element_size} m (coarse).")
@@ -436,6 +445,8 @@ def ron(element_size, discrete, protocol=None, name="nbc_suit", body="body"):
         edges = ", ".join(f'"{k}": (from: {a}, to: {b})' for k, (a, b) in p.edges.items())
         w("            (")
         w(f'                name: "{p.name}",')
+        if FINE_UNDERARM and p.name.startswith(("sleeve_under_upper_", "gusset_")):
+            w(f"                element_size: Some({f(FINE_UNDERARM)}),")
         w(f"                outline: [{', '.join(pt(q) for q in p.outline)}],")
         w(f"                edges: {{{edges}}},")
         w(f"                grain: {pt(p.grain)},")
@@ -486,9 +497,10 @@ if __name__ == "__main__":
         del args[i:i + 2]
     discrete = "--discrete" in args
     args = [a for a in args if a != "--discrete"]
-    if "--side-back" in args:
-        i = args.index("--side-back")
-        del args[i:i + 2]
+    for flag in ("--side-back", "--fine-underarm"):
+        if flag in args:
+            i = args.index(flag)
+            del args[i:i + 2]
     protocol = None
     if "--protocol" in args:
         i = args.index("--protocol")

@@ -136,10 +136,11 @@ fn nbc_suit_is_sewn_and_rests_on_the_mannequin() {
 }
 
 /// The first pose of the suit's movement protocol (issue 17): `garments/nbc_suit_protocol.ron`
-/// (the same suit, sewn and draped in the A-pose, then moved by `src/scene/protocol.rs`) with
-/// its motion cut to `garments/body/suit_twist.ron`: the trunk turned 30° to the left at the
-/// waist in 1 s, arms and legs held in the A-pose (about 730 time steps, 4800 Newton
-/// iterations, 100 s CPU for the pose). At rest in the new pose, after the mannequin has
+/// (the same suit with its under sleeves and underarm gussets meshed at 4 cm, sewn and draped
+/// in the A-pose, then moved by `src/scene/protocol.rs`) with its motion cut to
+/// `garments/body/suit_twist.ron`: the trunk turned 30° to the left at the waist in 1 s, arms
+/// and legs held in the A-pose (707 time steps, 4476 Newton iterations for the pose; the test
+/// about 135 s CPU). At rest in the new pose, after the mannequin has
 /// moved under the suit: every seam still closed (virtual-sewing bound, 1e-6 of the suit's
 /// size), no face inside the moving body at any accepted state (5 % of the laminate's
 /// thickness; the body placed at each state's clock, `contact::motion`), no overlapping
