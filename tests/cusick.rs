@@ -89,19 +89,29 @@ fn stiffer_fabric_drapes_to_a_higher_coefficient() {
 
 /// Mesh convergence of the drape coefficient (issue 4: "DC changes by less than 3 percentage
 /// points between the two finest meshes"). The scene's mesh family is refined uniformly —
-/// every radial and circumferential step scales with 1/ntheta — from 96 to 128 sectors
-/// (13,440 and 20,480 DOFs). Polyester faille is the preset whose coefficient moves most with
+/// every radial and circumferential step scales with 1/ntheta — from 128 to 160 sectors
+/// (20,480 and 29,600 DOFs). Polyester faille is the preset whose coefficient moves most with
 /// the mesh (its limp overhang folds tightly and wraps the 1 mm rim round); both meshes must
 /// also keep penetration below 5 % of the thickness.
+///
+/// The specimen is the seeded one of [`cusick`] (seed 1): its imperfection is a continuous
+/// random field of position (`RandomField`, 0.1 mm), so both meshes carry the same physical
+/// specimen and its folds are chosen by it, not by round-off. Measured (2026-12-05, DC % with
+/// folds): the perfect specimen picks its fold pattern by round-off — 96 sectors 29.6 (15) or
+/// 30.5 (15), 128 sectors 27.6 (13) or 27.3 (13), 160 sectors 26.2 (13) or 25.5 (12) with two
+/// builds differing only in the round-off of the element Hessians' PSD projection — while
+/// seed 1 gives 26.616 (12) at 128 and 25.498 (12) at 160 with either build. 96 sectors lie
+/// outside the asymptotic range (seeds 1 and 2: 30.2 → 26.6 and 29.7 → 27.5 from 96 to 128
+/// sectors), so this test refines from 128.
 #[test]
 fn drape_coefficient_converges_under_mesh_refinement() {
     // The two meshes solve side by side (two threads), as the runs of the test above do.
     let (coarse, fine) = std::thread::scope(|s| {
-        let coarse = s.spawn(|| cusick_on("polyester_faille", 0, 96));
-        let fine = cusick_on("polyester_faille", 0, 128);
-        (coarse.join().expect("96-sector run"), fine)
+        let coarse = s.spawn(|| cusick_on("polyester_faille", 1, 128));
+        let fine = cusick_on("polyester_faille", 1, 160);
+        (coarse.join().expect("128-sector run"), fine)
     });
     let change = fine.dc - coarse.dc;
-    assert!(change.abs() < 3.0, "faille DC moved {change:.2} points from 96 sectors ({:.2} %) to 128 ({:.2} %)", coarse.dc, fine.dc);
+    assert!(change.abs() < 3.0, "faille DC moved {change:.2} points from 128 sectors ({:.2} %) to 160 ({:.2} %)", coarse.dc, fine.dc);
     assert!(coarse.penetration_over_h < 0.05 && fine.penetration_over_h < 0.05, "penetration {} / {} of h", coarse.penetration_over_h, fine.penetration_over_h);
 }

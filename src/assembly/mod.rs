@@ -21,8 +21,10 @@ use crate::element::{orientation, ElemMat, ElemVec, ElementFailure, ElementGeome
 use crate::material::Voigt5;
 use crate::model::{Model, State, FIXED, UNTIED};
 
+pub mod psd;
 mod store;
 pub use store::CACHE_ELEMENTS;
+use psd::project_psd;
 use store::{MixedAccess, MixedStore, ResponseCache, ResponsePtr, MAX_MIXED_POINTS};
 
 const NO_SLOT: u32 = u32::MAX;
@@ -648,21 +650,6 @@ impl Assembler {
         model.dofs.fold(f_int);
         Ok(AssemblyInfo { energy, seconds: t0.elapsed().as_secs_f64(), reused: reuse })
     }
-}
-
-/// A positive semi-definite replacement of the symmetric element tangent `k` = V Λ Vᵀ:
-/// V |Λ| Vᵀ, the negative curvatures mirrored (Chen, Kaufman et al., *Trust-region
-/// eigenvalue filtering for projected Newton*, SIGGRAPH Asia 2024: far from a minimum the
-/// absolute value keeps the scale of the curvature, where clamping to zero, Teran et al.
-/// SCA 2005, leaves nearly singular directions and huge steps along them).
-fn project_psd(k: &ElemMat) -> ElemMat {
-    let sym = (k + k.transpose()) * 0.5;
-    let e = nalgebra::SymmetricEigen::new(sym);
-    if e.eigenvalues.iter().all(|&l| l >= 0.0) {
-        return sym;
-    }
-    let mirrored = e.eigenvalues.map(f64::abs);
-    &e.eigenvectors * nalgebra::Matrix::from_diagonal(&mirrored) * e.eigenvectors.transpose()
 }
 
 #[cfg(test)]
