@@ -18,6 +18,7 @@
 //! ```
 
 pub mod autodiff;
+pub mod input;
 pub mod element;
 pub mod mesh;
 pub mod material;

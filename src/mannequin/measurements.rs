@@ -12,7 +12,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::scene::{Locator, SceneError};
+use crate::input::{Locator, SceneError};
 
 /// Body measurements as written in a measurements file. Lengths in metres, written as plain
 /// numbers. Only `stature` is required; the others default to ratios of stature (module doc).
@@ -207,7 +207,7 @@ impl Measurements {
 /// Parses a measurements file (RON); `file` names it in errors. Returns the measurements
 /// with defaults filled in.
 pub fn parse_measurements(file: &str, text: &str) -> Result<Resolved, SceneError> {
-    let text = crate::scene::strip_bom(text);
+    let text = crate::input::strip_bom(text);
     let loc = Locator::new(file, text);
     // Optional measurements are written as plain numbers (`chest_girth: 1.0`, no `Some`).
     let options = ron::Options::default().with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME);

@@ -26,7 +26,7 @@ pub use segments::Girth;
 pub use skeleton::{Joint, Segment, Skeleton, JOINTS, SEGMENTS};
 pub use surface::TriSurface;
 
-use crate::scene::SceneError;
+use crate::input::SceneError;
 
 /// One rigid segment: its surface in its local frame and where that frame sits at rest.
 #[derive(Clone, Debug)]
@@ -127,7 +127,7 @@ impl Mannequin {
 /// (e.g. a scene). Errors are located as by the loaders.
 pub fn check_file(path: &std::path::Path) -> Option<Result<String, SceneError>> {
     let text = pose::read_text(path).ok()?;
-    let kind = ron_struct_name(crate::scene::strip_bom(&text))?;
+    let kind = ron_struct_name(crate::input::strip_bom(&text))?;
     Some(match kind {
         "Measurements" => load_measurements(path).map(|m| format!("measurements: stature {} m, chest {} m, waist {} m, hip {} m", m.stature, m.chest_girth, m.waist_girth, m.hip_girth)),
         "Pose" => load_pose(path).map(|_| "pose: joint angles valid".to_string()),

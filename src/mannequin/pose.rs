@@ -8,7 +8,7 @@ use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
 use serde::{Deserialize, Serialize};
 
 use super::skeleton::{Joint, Skeleton, JOINTS, SEGMENTS};
-use crate::scene::{Locator, SceneError};
+use crate::input::{Locator, SceneError};
 
 /// Angles of one joint in degrees; axes and signs in [`Joint::axes`].
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -255,7 +255,7 @@ struct FrameSpec {
 
 /// Parses pose text (RON); `file` names it in errors.
 pub fn parse_pose(file: &str, text: &str) -> Result<Pose, SceneError> {
-    let text = crate::scene::strip_bom(text);
+    let text = crate::input::strip_bom(text);
     let loc = Locator::new(file, text);
     let pose: Pose = ron::Options::default().from_str(text).map_err(|e| loc.from_ron(&e))?;
     pose.validate(&loc)?;
@@ -267,11 +267,11 @@ pub(super) fn read_text(path: &Path) -> Result<String, SceneError> {
     let file = path.display().to_string();
     let err = |message: String| SceneError { file: file.clone(), line: 0, column: 0, field: "file".into(), message };
     let len = std::fs::metadata(path).map_err(|e| err(format!("cannot read: {e}")))?.len();
-    if len > crate::scene::MAX_SCENE_BYTES {
-        return Err(err(format!("{len} bytes is larger than the {} bytes read", crate::scene::MAX_SCENE_BYTES)));
+    if len > crate::input::MAX_SCENE_BYTES {
+        return Err(err(format!("{len} bytes is larger than the {} bytes read", crate::input::MAX_SCENE_BYTES)));
     }
     let bytes = std::fs::read(path).map_err(|e| err(format!("cannot read: {e}")))?;
-    crate::scene::decode(&file, bytes)
+    crate::input::decode(&file, bytes)
 }
 
 /// Reads a pose file.
@@ -282,7 +282,7 @@ pub fn load_pose(path: &Path) -> Result<Pose, SceneError> {
 /// Parses motion text; its pose files are read relative to `base` (the motion file's
 /// directory). Errors in a pose file name that file; errors of the motion name `file`.
 pub fn parse_motion(file: &str, text: &str, base: &Path) -> Result<Motion, SceneError> {
-    let text = crate::scene::strip_bom(text);
+    let text = crate::input::strip_bom(text);
     let loc = Locator::new(file, text);
     let spec: MotionSpec = ron::Options::default().from_str(text).map_err(|e| loc.from_ron(&e))?;
     if spec.frames.is_empty() {

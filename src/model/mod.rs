@@ -8,6 +8,21 @@ use nalgebra::Vector3;
 
 use crate::element::{DirectorFrame, Section, ShellElement, NODE_DOFS};
 
+/// Translational and director-tilt DOFs for supports (scene files name them; the solver's
+/// displacement control drives one).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub enum Dof {
+    Ux,
+    Uy,
+    Uz,
+    /// Tilt of the director towards global x stays zero.
+    TiltX,
+    /// Tilt of the director towards global y stays zero.
+    TiltY,
+    /// Tilt of the director towards global z stays zero.
+    TiltZ,
+}
+
 /// Marker for a DOF that has no equation (fixed or prescribed).
 pub const FIXED: usize = usize::MAX;
 
@@ -338,7 +353,9 @@ impl DofMap {
     /// (upper triangle `values` on `pattern`): for a tie with director term (n, Z) on slave
     /// component k, ∂²(Z d_n,k)/∂α_a∂α_b = −Z d_n,k δ_ab (exponential map), times the slave's
     /// tie force r_s = f_int,s − f_ext,s (all-DOF vectors, slave entries kept by folding).
-    pub fn add_link_stiffness(&self, f_int: &[f64], f_ext: &[f64], pattern: &crate::assembly::Pattern, values: &mut [f64]) {
+    /// Each term reaches the caller as `add(equations, c)`: add c·wᵢwⱼ at every pair of the
+    /// weighted equations (i, wᵢ), (j, wⱼ) (the assembler's `Pattern::add_weighted`).
+    pub fn add_link_stiffness(&self, f_int: &[f64], f_ext: &[f64], add: &mut dyn FnMut(&[(usize, f64)], f64)) {
         if self.link_ties.is_empty() {
             return;
         }
@@ -363,7 +380,7 @@ impl DofMap {
             for l in 0..2 {
                 let mut exp = Vec::new();
                 self.expand_plain(NODE_DOFS * n + 3 + l, 1.0, &mut exp);
-                pattern.add_weighted(values, &exp, c);
+                add(&exp, c);
             }
         }
     }

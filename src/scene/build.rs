@@ -6,7 +6,7 @@ use std::sync::Arc;
 
 use nalgebra::Vector3;
 
-use super::error::{Locator, SceneError};
+use crate::input::{Locator, SceneError};
 use super::spec::*;
 use crate::element::quadrature::{bilinear, gauss_legendre};
 use crate::element::{DirectorFrame, Section, NODE_DOFS};

@@ -3,7 +3,7 @@
 //! quotes or backslashes, so that every message can quote them and the scene name can
 //! name output files. Errors print the name escaped, at its position in the file.
 
-use super::error::{Locator, SceneError};
+use crate::input::{Locator, SceneError};
 use super::spec::Scene;
 
 /// What is wrong with `name`, if anything.

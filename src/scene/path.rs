@@ -3,7 +3,7 @@
 
 use std::collections::BTreeMap;
 
-use super::error::{Locator, SceneError};
+use crate::input::{Locator, SceneError};
 use super::spec::{Dof, ImperfectionSpec, StepSpec};
 use crate::element::NODE_DOFS;
 use crate::model::{Load, LoadKind};

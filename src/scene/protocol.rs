@@ -10,7 +10,7 @@
 
 use std::path::Path;
 
-use super::error::{Locator, SceneError};
+use crate::input::{Locator, SceneError};
 use super::spec::{ProtocolSpec, ShapeSpec};
 use crate::solver::{StepKind, StepPlan};
 

@@ -451,19 +451,7 @@ fn plane_tol() -> f64 {
     1e-6
 }
 
-/// Translational and director-tilt DOFs for supports.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-pub enum Dof {
-    Ux,
-    Uy,
-    Uz,
-    /// Tilt of the director towards global x stays zero.
-    TiltX,
-    /// Tilt of the director towards global y stays zero.
-    TiltY,
-    /// Tilt of the director towards global z stays zero.
-    TiltZ,
-}
+pub use crate::model::Dof;
 
 /// Global axes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]

@@ -110,7 +110,7 @@ pub enum StepKind {
         /// Node set holding exactly one node.
         set: String,
         /// Controlled translation (Ux, Uy or Uz).
-        dof: crate::scene::Dof,
+        dof: crate::model::Dof,
         /// Change of the controlled displacement over the step.
         value: f64,
         /// Global DOF index, resolved when the scene is built.

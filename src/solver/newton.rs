@@ -328,7 +328,8 @@ impl<'m> Solver<'m> {
         }
         if tangent {
             // Rigid links: second-order term of the state-dependent tie weights.
-            self.model.dofs.add_link_stiffness(&self.f_int, &self.f_ext, &self.assembler.pattern, &mut self.values);
+            let (pattern, values) = (&self.assembler.pattern, &mut self.values);
+            self.model.dofs.add_link_stiffness(&self.f_int, &self.f_ext, &mut |exp, c| pattern.add_weighted(values, exp, c));
         }
         Ok(info.energy)
     }

@@ -1,4 +1,4 @@
-//! Scene errors that point at a file, line, column and field.
+//! Input errors that point at a file, line, column and field.
 
 use std::fmt;
 
