@@ -3,8 +3,28 @@
 use serde::Serialize;
 
 use crate::model::{Model, State};
-use crate::scene::{Monitor, MonitorDof};
 use crate::solver::{IncrementReport, Timings};
+
+/// A monitored node.
+#[derive(Clone, Debug)]
+pub struct Monitor {
+    /// Monitor name.
+    pub name: String,
+    /// Global node.
+    pub node: usize,
+    /// Recorded quantities.
+    pub dofs: Vec<MonitorDof>,
+}
+
+/// Recorded quantities.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub enum MonitorDof {
+    Ux,
+    Uy,
+    Uz,
+    /// Displacement magnitude.
+    Umag,
+}
 
 /// History of one monitored node.
 #[derive(Clone, Debug, Serialize)]

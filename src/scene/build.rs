@@ -13,18 +13,8 @@ use crate::element::{DirectorFrame, Section, NODE_DOFS};
 use crate::material::{bulk_shear_from_young_poisson, Fabric, NeoHookean, ShellMaterial, StVenantKirchhoff};
 use crate::mesh::{self, MeshQuality, ShellMesh};
 use crate::model::{DofMap, ElementDef, Load, LoadKind, Model, PartInfo};
+use crate::results::Monitor;
 use crate::solver::StepPlan;
-
-/// A monitored node.
-#[derive(Clone, Debug)]
-pub struct Monitor {
-    /// Monitor name.
-    pub name: String,
-    /// Global node.
-    pub node: usize,
-    /// Recorded quantities.
-    pub dofs: Vec<MonitorDof>,
-}
 
 /// Everything the solver and the exporter need from a scene.
 #[derive(Clone, Debug)]

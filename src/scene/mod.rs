@@ -7,7 +7,8 @@ mod path;
 pub mod protocol;
 mod spec;
 
-pub use build::{build, BuiltScene, Monitor};
+pub use build::{build, BuiltScene};
+pub use crate::results::Monitor;
 pub use crate::input::{decode, strip_bom, Locator, SceneError, MAX_SCENE_BYTES};
 pub use spec::*;
 

@@ -554,15 +554,7 @@ pub struct MonitorSpec {
     pub dofs: Vec<MonitorDof>,
 }
 
-/// Recorded quantities.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-pub enum MonitorDof {
-    Ux,
-    Uy,
-    Uz,
-    /// Displacement magnitude.
-    Umag,
-}
+pub use crate::results::MonitorDof;
 
 /// Output controls.
 #[derive(Clone, Debug, Serialize, Deserialize)]
