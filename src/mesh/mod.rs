@@ -13,12 +13,14 @@ use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::fmt;
 
+pub mod annulus;
 pub mod generate;
 pub mod obj;
 pub mod select;
 pub mod spacing;
 
-pub use generate::{annulus, annulus_rings, cylindrical_panel, cylindrical_panel_spaced, focused_rings, hemisphere, hemisphere_spaced, rectangle, slit_annulus, twisted_strip};
+pub use annulus::{annulus, annulus_rings, focused_rings, slit_annulus};
+pub use generate::{cylindrical_panel, cylindrical_panel_spaced, hemisphere, hemisphere_spaced, rectangle, twisted_strip};
 pub use spacing::Spacing;
 pub use obj::{from_obj, read_obj};
 pub use select::{select_box, select_edge, select_nearest, select_plane};
