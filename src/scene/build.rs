@@ -15,6 +15,7 @@ use crate::mesh::{self, MeshQuality, ShellMesh};
 use crate::model::{DofMap, ElementDef, Load, LoadKind, Model, PartInfo};
 use crate::results::Monitor;
 use crate::solver::StepPlan;
+use super::steps::{check_solver, plan_steps};
 
 /// Everything the solver and the exporter need from a scene.
 #[derive(Clone, Debug)]
@@ -44,17 +45,6 @@ pub struct BuiltScene {
     /// The movement protocol's poses and their steps (appended to `steps`), if any.
     pub protocol: Option<super::protocol::Protocol>,
 }
-
-/// Most increments of one step (each reported and possibly written as a VTU).
-pub const MAX_INCREMENTS: usize = 1_000_000;
-/// Most Newton iterations per increment.
-pub const MAX_ITERATIONS: usize = 10_000;
-/// Most cut-backs (halvings) of an increment.
-pub const MAX_CUTBACKS: usize = 60;
-/// Most solver threads.
-pub const MAX_THREADS: usize = 1024;
-/// Most modes of a buckling step (each a vector of all DOFs, plus the Lanczos basis).
-pub const MAX_BUCKLING_MODES: usize = 100;
 
 fn v3(a: [f64; 3]) -> Vector3<f64> {
     Vector3::new(a[0], a[1], a[2])
@@ -523,69 +513,8 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
         loads.push(Load { name: name.clone(), kind });
     }
 
-    // Solver controls: bounded loops and thread counts.
-    let sv = &scene.solver;
-    let bad_solver = |key: &str, msg: String| loc.at(None, Some(key), format!("solver.{key}"), msg);
-    if !(1..=MAX_ITERATIONS).contains(&sv.max_iterations) {
-        return Err(bad_solver("max_iterations", format!("expected 1 to {MAX_ITERATIONS} Newton iterations per increment, found {}", sv.max_iterations)));
-    }
-    if !(sv.residual_tol.is_finite() && sv.residual_tol > 0.0 && sv.residual_tol < 1.0) {
-        return Err(bad_solver("residual_tol", format!("expected a relative tolerance in (0, 1), found {}", sv.residual_tol)));
-    }
-    if !(sv.energy_tol.is_finite() && sv.energy_tol > 0.0 && sv.energy_tol < 1.0) {
-        return Err(bad_solver("energy_tol", format!("expected a relative tolerance in (0, 1), found {}", sv.energy_tol)));
-    }
-    if sv.max_cutbacks > MAX_CUTBACKS {
-        return Err(bad_solver("max_cutbacks", format!("expected at most {MAX_CUTBACKS} halvings (2^-{MAX_CUTBACKS} of an increment is below rounding), found {}", sv.max_cutbacks)));
-    }
-    if sv.threads > MAX_THREADS {
-        return Err(bad_solver("threads", format!("expected 0 (all cores) to {MAX_THREADS} threads, found {}", sv.threads)));
-    }
-    if let Some(Err((field, msg))) = sv.chord.map(|c| c.validate()) {
-        return Err(loc.at(None, Some(field), format!("solver.chord.{field}"), msg));
-    }
-
-    // Steps.
-    if scene.steps.is_empty() {
-        return Err(loc.at(None, Some("steps"), "steps", "expected at least one step"));
-    }
-    let mut steps = Vec::new();
-    let mut current = vec![0.0; loads.len()];
-    for (si, s) in scene.steps.iter().enumerate() {
-        let field = format!("steps[{}]", s.name);
-        if s.increments == 0 || s.increments > MAX_INCREMENTS {
-            return Err(loc.at(Some(&s.name), Some("increments"), format!("{field}.increments"), format!("expected 1 to {MAX_INCREMENTS} increments, found {}", s.increments)));
-        }
-        if let crate::solver::StepKind::Buckling { modes, .. } = &s.kind
-            && *modes > MAX_BUCKLING_MODES
-        {
-            return Err(loc.at(Some(&s.name), Some("modes"), format!("{field}.kind.modes"), format!("expected 1 to {MAX_BUCKLING_MODES} buckling modes, found {modes}")));
-        }
-        if let crate::solver::StepKind::Dynamic(ds) = &s.kind {
-            if let Some((key, msg)) = crate::solver::dynamics::check_settings(ds) {
-                return Err(loc.at(Some(&s.name), Some(key), format!("{field}.kind.{key}"), msg));
-            }
-        }
-        let previous = current.clone();
-        for (lname, &v) in &s.scale {
-            let Some(i) = loads.iter().position(|l| &l.name == lname) else {
-                let known: Vec<&str> = loads.iter().map(|l| l.name.as_str()).collect();
-                return Err(loc.at_value(&s.name, lname, format!("{field}.scale"), format!("no load named \"{lname}\"; loads: {}", known.join(", "))));
-            };
-            if !v.is_finite() {
-                return Err(loc.at_value(&s.name, lname, format!("{field}.scale[{lname}]"), "expected a finite scale"));
-            }
-            current[i] = v;
-        }
-        let _ = si;
-        let kind = super::path::resolve_step_kind(s, &field, &loc, &node_sets, &loads, &fixed)?;
-        // What the solver would refuse only when it reaches the step: a buckling or
-        // arc-length step without a load change.
-        if matches!(kind, crate::solver::StepKind::Buckling { .. } | crate::solver::StepKind::ArcLength { .. }) && current == previous {
-            return Err(loc.at(Some(&s.name), Some("scale"), format!("{field}.scale"), "the step changes no load: give the reference load's target scale in its scale table"));
-        }
-        steps.push(StepPlan { name: s.name.clone(), increments: s.increments, linear: s.linear, automatic_increments: s.automatic_increments, target_scales: current.clone(), kind, clock: None });
-    }
+    check_solver(&scene.solver, &loc)?;
+    let (mut steps, current) = plan_steps(scene, &loc, &node_sets, &loads, &fixed)?;
 
     // Monitors.
     let mut monitors = Vec::new();

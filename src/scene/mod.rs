@@ -6,6 +6,7 @@ mod names;
 mod path;
 pub mod protocol;
 mod spec;
+mod steps;
 
 pub use build::{build, BuiltScene};
 pub use crate::results::Monitor;
