@@ -215,7 +215,7 @@ pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &m
     if let Some(c) = &built.contact {
         let mut extra = std::mem::take(&mut summary.extra);
         let measured = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-            crate::contact::summarize(scene, c, model, &state, solver.clock(), solver.nodal_forces(), &mut extra);
+            crate::contact::summarize(scene.drape.as_ref(), c, model, &state, solver.clock(), solver.nodal_forces(), &mut extra);
         }));
         if measured.is_err() {
             problems.push("the contact and drape measures failed (see the message above)".into());

@@ -10,6 +10,7 @@ pub mod intersection;
 pub mod ipc;
 pub mod mechanics;
 pub mod motion;
+pub mod spec;
 pub mod stabilize;
 pub mod trimesh_io;
 
@@ -26,7 +27,8 @@ pub use stabilize::Stabilization;
 
 use crate::model::PartInfo;
 use trimesh_io::TriSoup;
-use crate::scene::{ContactSpec, Locator, SceneError, ShapeSpec};
+use crate::input::{Locator, SceneError};
+use spec::{ContactFormulation, ContactSpec, DrapeSpec, ShapeSpec};
 
 /// Rigid bodies, the participating parts and the contact controls of a scene.
 #[derive(Clone, Debug)]
@@ -126,7 +128,7 @@ pub fn build_contact(spec: &ContactSpec, loc: &Locator, base_dir: &Path, parts: 
         let motion = if b.motion.is_empty() {
             None
         } else {
-            if matches!(spec.formulation, crate::scene::ContactFormulation::AugmentedLagrangian) {
+            if matches!(spec.formulation, ContactFormulation::AugmentedLagrangian) {
                 return Err(bad(
                     "motion",
                     "a moving body needs barrier contact (formulation: Barrier()); the augmented-Lagrangian penalty contact holds bodies still".into(),
@@ -143,7 +145,7 @@ pub fn build_contact(spec: &ContactSpec, loc: &Locator, base_dir: &Path, parts: 
             if motion.is_some() {
                 return Err(bad("motion", "a mannequin with a motion file moves by its poses; give its keyframes there (pose translations), not as body keyframes".into()));
             }
-            if matches!(spec.formulation, crate::scene::ContactFormulation::AugmentedLagrangian) {
+            if matches!(spec.formulation, ContactFormulation::AugmentedLagrangian) {
                 return Err(bad("shape", "a mannequin with a motion file needs barrier contact (formulation: Barrier()); the augmented-Lagrangian penalty contact holds bodies still".into()));
             }
             // Segment keyframes K_s(t) are global isometries that carry the first frame's
@@ -183,8 +185,8 @@ pub fn build_contact(spec: &ContactSpec, loc: &Locator, base_dir: &Path, parts: 
         return Err(loc.at(None, Some("tangential_factor"), "contact.tangential_factor", "expected a positive tangential factor"));
     }
     let barrier = match &spec.formulation {
-        crate::scene::ContactFormulation::AugmentedLagrangian => None,
-        crate::scene::ContactFormulation::Barrier { distance_factor, stiffness_factor, friction_slip } => {
+        ContactFormulation::AugmentedLagrangian => None,
+        ContactFormulation::Barrier { distance_factor, stiffness_factor, friction_slip } => {
             for (key, v) in [("distance_factor", distance_factor), ("stiffness_factor", stiffness_factor), ("friction_slip", friction_slip)] {
                 if !pos(*v) {
                     return Err(loc.at(None, Some(key), format!("contact.formulation.{key}"), format!("expected a positive number, found {v}")));
@@ -313,10 +315,10 @@ pub fn max_penetration(model: &crate::model::Model, state: &crate::model::State,
         .reduce(|| 0.0, f64::max)
 }
 
-/// Writes the contact, stabilization and drape sections of summary.json into `extra`;
-/// `time` is the analysis time of `state` (moving bodies are placed there, `motion`).
+/// Writes the contact, stabilization and (for a `drape` spec) drape sections of summary.json
+/// into `extra`; `time` is the analysis time of `state` (moving bodies are placed there, `motion`).
 pub fn summarize(
-    scene: &crate::scene::Scene,
+    drape: Option<&DrapeSpec>,
     setup: &ContactSetup,
     model: &crate::model::Model,
     state: &crate::model::State,
@@ -332,7 +334,7 @@ pub fn summarize(
     if !setup.warnings.is_empty() {
         extra.insert("contact_warnings".into(), serde_json::json!(setup.warnings));
     }
-    if let Some(d) = &scene.drape {
+    if let Some(d) = drape {
         let res = d.resolution.unwrap_or(d.specimen_radius / 1000.0);
         let placed: Vec<RigidBody> = setup.bodies.iter().map(|b| b.at_time(time)).collect();
         let pen = max_penetration(model, state, &placed);

@@ -30,7 +30,8 @@ use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
 use super::place::ellipse_arc;
 use super::spec::{GarmentSpec, PanelSpec, Placement};
 use crate::mannequin::{self, Mannequin, Pose, Segment, SEGMENTS};
-use crate::scene::{BodySpec, ContactSpec, Locator, SceneError, ShapeSpec};
+use crate::contact::spec::{BodySpec, ContactSpec, ShapeSpec};
+use crate::input::{Locator, SceneError};
 
 /// The side of a segment an arrangement point names.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -16,7 +16,7 @@ use super::{seam_ties, SeamInfo};
 use crate::element::{DirectorFrame, NODE_DOFS};
 use crate::mesh::ShellMesh;
 use crate::model::{Load, Tie};
-use crate::scene::{Locator, SceneError};
+use crate::input::{Locator, SceneError};
 
 /// One ply of one panel, or a laminated panel, as a shell part.
 #[derive(Clone, Debug)]

@@ -9,7 +9,7 @@ use petgraph::unionfind::UnionFind;
 use petgraph::visit::EdgeRef;
 
 use super::spec::{GarmentSpec, PanelSpec, SpanRef};
-use crate::scene::{Locator, SceneError};
+use crate::input::{Locator, SceneError};
 
 /// Panels (node weight: index into `GarmentSpec::panels`) joined by seams (edge weight:
 /// index into `GarmentSpec::seams`).
