@@ -338,6 +338,45 @@ impl SurfaceContact {
         }
     }
 
+    /// The candidate pairs at configuration `x`: the last sweep's when `x` lies within it,
+    /// else those of a search of the trees.
+    fn candidates_at(&self, x: &(dyn Fn(usize) -> Vector3<f64> + Sync)) -> Arc<Vec<Pair>> {
+        let swept = self.swept_pairs(x);
+        if let Ok(mut tm) = self.timings.lock() {
+            if swept.is_some() {
+                tm.evaluations_on_sweep += 1;
+            } else {
+                tm.evaluations_searched += 1;
+            }
+        }
+        swept.unwrap_or_else(|| Arc::new(self.pairs(&[x], &self.pads())))
+    }
+
+    /// The energy κ_p m_p b(d, d̂_p) of one candidate pair on `nodes` at positions `xs`, as
+    /// [`SurfaceContact::evaluate`] forms it (the same operations, the same value to the bit):
+    /// None when inactive (gap ≥ d̂), infinite at or through zero gap.
+    fn pair_energy(&self, kind: Kind, nodes: &[usize; 4], xs: &[Vector3<f64>; 4], c: &Constants) -> Option<f64> {
+        let (feat, _) = Self::feature(kind, xs);
+        let gap = squared_distance_value(feat, xs).sqrt() - c.offset;
+        if gap >= c.dhat {
+            return None;
+        }
+        if gap <= 0.0 {
+            return Some(f64::INFINITY);
+        }
+        let kap = nodes.iter().map(|&a| self.kappa[a]).sum::<f64>() / 4.0;
+        let (b, _, _) = barrier(gap, c.dhat);
+        let mut m = 1.0;
+        if kind == Kind::EdgeEdge {
+            let (u, v) = (xs[1] - xs[0], xs[3] - xs[2]);
+            let cs2 = u.cross(&v).norm_squared();
+            if cs2 < c.eps {
+                m = mollifier(cs2, c.eps).0;
+            }
+        }
+        Some(kap * b * m)
+    }
+
     /// The active pairs at `state` (gap below d̂): gap, energy κ_p m_p b(d, d̂_p), normal force
     /// and closest-point weights, with the energy's first two derivatives in the distance of
     /// the pair's closest feature (summed per feature and differentiated in the nodes by
@@ -346,16 +385,7 @@ impl SurfaceContact {
     /// A pair at or through zero gap has infinite energy.
     fn evaluate(&self, model: &Model, state: &State, derivatives: bool) -> Vec<Term> {
         let x = |a: usize| model.x0[a] + state.u[a];
-        let swept = self.swept_pairs(&x);
-        if let Ok(mut tm) = self.timings.lock() {
-            if swept.is_some() {
-                tm.evaluations_on_sweep += 1;
-            } else {
-                tm.evaluations_searched += 1;
-            }
-        }
-        let pairs = swept.unwrap_or_else(|| Arc::new(self.pairs(&[&x], &self.pads())));
-        pairs
+        self.candidates_at(&x)
             .par_iter()
             .filter_map(|&(kind, key, nodes, c)| {
                 let xs = nodes.map(x);
@@ -491,17 +521,21 @@ impl NodalForces for SurfaceContact {
     /// (`last`, used by `commit`) is left alone.
     fn potential_at(&mut self, model: &Model, state: &State) -> Option<f64> {
         let t = Instant::now();
-        let terms = self.evaluate(model, state, false);
         let x = |a: usize| model.x0[a] + state.u[a];
+        // The active pairs' energies alone, in the order of `evaluate`'s terms (an indexed
+        // collect, summed in order below).
+        let pairs = self.candidates_at(&x);
+        let mut energies: Vec<Option<f64>> = Vec::new();
+        pairs.par_iter().map(|(kind, _, nodes, c)| self.pair_energy(*kind, nodes, &nodes.map(x), c)).collect_into_vec(&mut energies);
         let fr = self.friction_terms(&x, false);
         self.search_s += t.elapsed().as_secs_f64();
         let mut pot = 0.0;
-        for term in &terms {
-            if !term.energy.is_finite() {
+        for energy in energies.into_iter().flatten() {
+            if !energy.is_finite() {
                 pot = f64::INFINITY;
                 continue;
             }
-            pot += term.energy;
+            pot += energy;
         }
         for ft in &fr {
             pot += ft.energy;
