@@ -185,6 +185,9 @@ pub struct SurfaceContact {
     last_friction: Vec<FrictionTerm>,
     /// Contact nodes' displacements at the last evaluation.
     last_u: Vec<Vector3<f64>>,
+    /// The candidates of the last evaluation with derivatives (a Newton iterate, at
+    /// `last_u`) and their gaps there: the start of the next collision-detection sweep.
+    start_gaps: Option<(Arc<Vec<Pair>>, Vec<f64>)>,
     last_potential: f64,
     search_s: f64,
     /// Wall time split, for the summary.
@@ -319,6 +322,7 @@ impl SurfaceContact {
             last: Vec::new(),
             last_friction: Vec::new(),
             last_u: Vec::new(),
+            start_gaps: None,
             last_potential: 0.0,
             search_s: 0.0,
             timings: std::sync::Mutex::new(SurfaceTimings::default()),
@@ -385,53 +389,93 @@ impl SurfaceContact {
     /// A pair at or through zero gap has infinite energy.
     fn evaluate(&self, model: &Model, state: &State, derivatives: bool) -> Vec<Term> {
         let x = |a: usize| model.x0[a] + state.u[a];
-        self.candidates_at(&x)
-            .par_iter()
-            .filter_map(|&(kind, key, nodes, c)| {
-                let xs = nodes.map(x);
-                let (feat, weights) = Self::feature(kind, &xs);
-                let dist = squared_distance_value(feat, &xs).sqrt();
-                let gap = dist - c.offset;
-                if gap >= c.dhat {
-                    return None;
-                }
-                let kap = nodes.iter().map(|&a| self.kappa[a]).sum::<f64>() / 4.0;
-                let r: Vector3<f64> = (0..4).map(|k| xs[k] * weights[k]).sum();
-                let normal = if dist > 0.0 { r / dist } else { Vector3::zeros() };
-                let thin = 2.0 * nodes.iter().map(|&a| self.half[a]).fold(f64::INFINITY, f64::min);
-                let feature = FeatureKey::of(feat, &nodes);
-                let inf = Scalar { e: f64::INFINITY, e1: 0.0, e2: 0.0 };
-                let mut term = Term { kind, key, nodes, feature, scalar: inf, mollified: None, gap, dhat: c.dhat, thin, energy: f64::INFINITY, force: f64::INFINITY, normal, weights };
-                if gap <= 0.0 {
-                    return Some(term);
-                }
-                let (b, b1, b2) = barrier(gap, c.dhat);
-                // κ b(√q − c_p) (× m(|e_a × e_b|²) for nearly parallel edges): its exact
-                // gradient and Hessian follow by second-order automatic differentiation of the
-                // squared distance q. The Hessian is not projected: a pair pressed onto a
-                // vertex or an edge of the other surface has a negative tangential stiffness
-                // κ b′ ∇²dist (the force turns as the point slides), and Newton without it
-                // stalls where plies slide on each other (the NBC sleeve in a static step
-                // stopped at a residual of 10⁻⁶ with a projected or Gauss–Newton tangent; it
-                // converges with the exact one).
-                let mut m = 1.0;
-                if kind == Kind::EdgeEdge {
-                    let (u, v) = (xs[1] - xs[0], xs[3] - xs[2]);
-                    let cs2 = u.cross(&v).norm_squared();
-                    if cs2 < c.eps {
-                        m = mollifier(cs2, c.eps).0;
-                        if derivatives {
-                            let f = Scalar { e: kap * b, e1: kap * b1, e2: kap * b2 };
-                            term.mollified = Some(Box::new(mollified_derivative(&nodes, &feature, &f, c.eps, &x)));
-                        }
+        self.evaluate_pairs(&self.candidates_at(&x), &x, derivatives, None)
+    }
+
+    /// [`SurfaceContact::evaluate`] over the candidates `pairs` at positions `x`; with
+    /// `gaps`, also every candidate's gap d = dist − c_p (active or not), in the order of
+    /// `pairs`.
+    fn evaluate_pairs<X: Fn(usize) -> Vector3<f64> + Sync>(&self, pairs: &[Pair], x: &X, derivatives: bool, gaps: Option<&mut Vec<f64>>) -> Vec<Term> {
+        let term = |&(kind, key, nodes, c): &Pair, gap_out: Option<&mut f64>| {
+            let xs = nodes.map(x);
+            let (feat, weights) = Self::feature(kind, &xs);
+            let dist = squared_distance_value(feat, &xs).sqrt();
+            let gap = dist - c.offset;
+            if let Some(g) = gap_out {
+                *g = gap;
+            }
+            if gap >= c.dhat {
+                return None;
+            }
+            let kap = nodes.iter().map(|&a| self.kappa[a]).sum::<f64>() / 4.0;
+            let r: Vector3<f64> = (0..4).map(|k| xs[k] * weights[k]).sum();
+            let normal = if dist > 0.0 { r / dist } else { Vector3::zeros() };
+            let thin = 2.0 * nodes.iter().map(|&a| self.half[a]).fold(f64::INFINITY, f64::min);
+            let feature = FeatureKey::of(feat, &nodes);
+            let inf = Scalar { e: f64::INFINITY, e1: 0.0, e2: 0.0 };
+            let mut term = Term { kind, key, nodes, feature, scalar: inf, mollified: None, gap, dhat: c.dhat, thin, energy: f64::INFINITY, force: f64::INFINITY, normal, weights };
+            if gap <= 0.0 {
+                return Some(term);
+            }
+            let (b, b1, b2) = barrier(gap, c.dhat);
+            // κ b(√q − c_p) (× m(|e_a × e_b|²) for nearly parallel edges): its exact
+            // gradient and Hessian follow by second-order automatic differentiation of the
+            // squared distance q. The Hessian is not projected: a pair pressed onto a
+            // vertex or an edge of the other surface has a negative tangential stiffness
+            // κ b′ ∇²dist (the force turns as the point slides), and Newton without it
+            // stalls where plies slide on each other (the NBC sleeve in a static step
+            // stopped at a residual of 10⁻⁶ with a projected or Gauss–Newton tangent; it
+            // converges with the exact one).
+            let mut m = 1.0;
+            if kind == Kind::EdgeEdge {
+                let (u, v) = (xs[1] - xs[0], xs[3] - xs[2]);
+                let cs2 = u.cross(&v).norm_squared();
+                if cs2 < c.eps {
+                    m = mollifier(cs2, c.eps).0;
+                    if derivatives {
+                        let f = Scalar { e: kap * b, e1: kap * b1, e2: kap * b2 };
+                        term.mollified = Some(Box::new(mollified_derivative(&nodes, &feature, &f, c.eps, x)));
                     }
                 }
-                term.scalar = Scalar { e: kap * b * m, e1: kap * b1, e2: kap * b2 };
-                term.energy = kap * b * m;
-                term.force = -kap * m * b1;
-                Some(term)
-            })
-            .collect()
+            }
+            term.scalar = Scalar { e: kap * b * m, e1: kap * b1, e2: kap * b2 };
+            term.energy = kap * b * m;
+            term.force = -kap * m * b1;
+            Some(term)
+        };
+        match gaps {
+            Some(g) => {
+                g.clear();
+                g.resize(pairs.len(), f64::NAN);
+                pairs.par_iter().zip(g.par_iter_mut()).filter_map(|(p, g)| term(p, Some(g))).collect()
+            }
+            None => pairs.par_iter().filter_map(|p| term(p, None)).collect(),
+        }
+    }
+
+    /// The gap of every pair of `pairs` at `from` where the last Newton evaluation
+    /// (`add_coupled`) found it — at that very state, bit for bit, among its candidates —
+    /// else NaN. Both candidate lists are in the broad phase's order (point–triangle pairs
+    /// by point and triangle, then edge–edge pairs by edges), so one merge finds them.
+    fn gaps_at_start(&self, pairs: &[Pair], from: &State) -> Vec<f64> {
+        let mut out = vec![f64::NAN; pairs.len()];
+        let Some((known, gaps)) = self.start_gaps.as_ref() else { return out };
+        let same = |a: &Vector3<f64>, b: &Vector3<f64>| a.iter().zip(b.iter()).all(|(p, q)| p.to_bits() == q.to_bits());
+        if self.last_u.len() != self.points.len() || !self.points.iter().zip(&self.last_u).all(|(&a, u)| same(&from.u[a], u)) {
+            return out;
+        }
+        let order = |p: &Pair| (p.0 == Kind::EdgeEdge, p.1);
+        let mut j = 0;
+        for (p, g) in pairs.iter().zip(out.iter_mut()) {
+            let k = order(p);
+            while j < known.len() && order(&known[j]) < k {
+                j += 1;
+            }
+            if j < known.len() && order(&known[j]) == k {
+                *g = gaps[j];
+            }
+        }
+        out
     }
 
     /// Forces and tangent blocks of the barrier terms: per closest feature for the pairs
@@ -472,8 +516,12 @@ impl NodalForces for SurfaceContact {
 
     fn add_coupled(&mut self, model: &Model, state: &State, f_ext: &mut [f64], jacobian: &mut Vec<(usize, Matrix3<f64>)>, pairs: &mut Vec<(usize, usize, Matrix3<f64>)>) {
         let t = Instant::now();
-        let terms = self.evaluate(model, state, true);
         let x = |a: usize| model.x0[a] + state.u[a];
+        let candidates = self.candidates_at(&x);
+        let mut gaps = self.start_gaps.take().map(|g| g.1).unwrap_or_default();
+        let terms = self.evaluate_pairs(&candidates, &x, true, Some(&mut gaps));
+        // Kept for the collision detection of the step from this state (`max_step`).
+        self.start_gaps = Some((candidates, gaps));
         let fr = self.friction_terms(&x, true);
         self.search_s += t.elapsed().as_secs_f64();
         let mut pot = 0.0;
@@ -561,9 +609,13 @@ impl NodalForces for SurfaceContact {
         let lo: Vec<Vector3<f64>> = self.points.iter().map(|&a| x0(a).inf(&x1(a))).collect();
         let hi: Vec<Vector3<f64>> = self.points.iter().map(|&a| x0(a).sup(&x1(a))).collect();
         let pairs = Arc::new(self.sweep_pairs(&x0, &x1, &lo, &hi));
+        // The gaps at `from` the last Newton evaluation found (the same values gap_at(0)
+        // computes: the same operations on the same positions).
+        let start = self.gaps_at_start(&pairs, from);
         let s = pairs
             .par_iter()
-            .map(|&(kind, _, nodes, c)| {
+            .zip(&start)
+            .map(|(&(kind, _, nodes, c), &g0)| {
                 let a = nodes.map(x0);
                 let d: [Vector3<f64>; 4] = std::array::from_fn(|k| x1(nodes[k]) - a[k]);
                 // The distance does not change when all four nodes move alike: bound the rate
@@ -583,7 +635,8 @@ impl NodalForces for SurfaceContact {
                     let (feat, _) = Self::feature(kind, &xs);
                     squared_distance_value(feat, &xs).sqrt() - c.offset
                 };
-                conservative_advancement(gap_at(0.0), m1 + m2, CCD_CLOSE, 100, |s| Some(gap_at(s)))
+                let g0 = if g0.is_nan() || !d.iter().all(|v| v.iter().all(|c| c.is_finite())) { gap_at(0.0) } else { g0 };
+                conservative_advancement(g0, m1 + m2, CCD_CLOSE, 100, |s| Some(gap_at(s)))
             })
             .reduce(|| 1.0, f64::min);
         if let Ok(mut sw) = self.sweep.lock() {
