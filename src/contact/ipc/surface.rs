@@ -55,7 +55,7 @@ use rayon::prelude::*;
 
 use super::broad_phase::{Sweep, Trees};
 use super::friction::{Friction, FrictionTerm};
-use super::potential::{derivative, group, mollified_derivative, Blocks, Derivative, FeatureKey, FxMap, Scalar};
+use super::potential::{derivative_into, group, mollified_derivative, Blocks, Derivative, FeatureKey, FxMap, Scalar};
 pub use super::report::{SurfaceIncrement, SurfaceTimings};
 pub use super::settings::{SurfaceSettings, SurfaceSetup};
 use super::primitives::{edge_edge_feature, mollifier, point_triangle_feature, squared_distance_value, Feature};
@@ -188,6 +188,8 @@ pub struct SurfaceContact {
     /// The candidates of the last evaluation with derivatives (a Newton iterate, at
     /// `last_u`) and their gaps there: the start of the next collision-detection sweep.
     start_gaps: Option<(Arc<Vec<Pair>>, Vec<f64>)>,
+    /// Buffer of the per-feature barrier derivatives (`barrier_derivatives`).
+    derivatives: Vec<Derivative>,
     last_potential: f64,
     search_s: f64,
     /// Wall time split, for the summary.
@@ -323,6 +325,7 @@ impl SurfaceContact {
             last_friction: Vec::new(),
             last_u: Vec::new(),
             start_gaps: None,
+            derivatives: Vec::new(),
             last_potential: 0.0,
             search_s: 0.0,
             timings: std::sync::Mutex::new(SurfaceTimings::default()),
@@ -480,15 +483,16 @@ impl SurfaceContact {
 
     /// Forces and tangent blocks of the barrier terms: per closest feature for the pairs
     /// without mollifier, per pair for those with it.
-    fn barrier_derivatives(&self, terms: &[Term], x: &(dyn Fn(usize) -> Vector3<f64> + Sync)) -> Vec<Derivative> {
+    /// The per-feature derivatives go into `out` (a buffer kept between evaluations and
+    /// written in place: a derivative is 1.3 KB, and building, zeroing and moving each one
+    /// cost more than its arithmetic); the mollified pairs' are those of their terms.
+    fn barrier_derivatives(&self, terms: &[Term], x: &(dyn Fn(usize) -> Vector3<f64> + Sync), out: &mut Vec<Derivative>) {
         let grouped = group(terms.iter().filter(|t| t.mollified.is_none() && t.energy.is_finite()).map(|t| (t.feature, t.scalar)));
-        let n_mollified = terms.iter().filter(|t| t.mollified.is_some()).count();
-        let mut out: Vec<Derivative> = Vec::with_capacity(grouped.len() + n_mollified);
-        // Written in place (an indexed collect), not gathered in chunks and copied.
-        grouped.par_iter().map(|(k, s)| derivative(k, s, x)).collect_into_vec(&mut out);
-        out.reserve(n_mollified);
-        out.extend(terms.iter().filter_map(|t| t.mollified.as_ref().map(|e| (**e).clone())));
-        out
+        if out.len() < grouped.len() {
+            out.resize(grouped.len(), Derivative::zero());
+        }
+        out.truncate(grouped.len());
+        out.par_iter_mut().zip(&grouped).for_each(|(d, (k, s))| derivative_into(k, s, x, d));
     }
 
     /// Friction potentials of the committed pairs at `x`.
@@ -538,9 +542,12 @@ impl NodalForces for SurfaceContact {
         if pot.is_finite() {
             // By reference: a derivative is 1.3 KB, and moving each out of the list cost
             // more than adding it.
-            for d in &self.barrier_derivatives(&terms, &x) {
+            let mut derivatives = std::mem::take(&mut self.derivatives);
+            self.barrier_derivatives(&terms, &x, &mut derivatives);
+            for d in derivatives.iter().chain(terms.iter().filter_map(|t| t.mollified.as_deref())) {
                 blocks.add_derivative(d, f_ext, true);
             }
+            self.derivatives = derivatives;
         }
         for ft in &fr {
             pot += ft.energy;
