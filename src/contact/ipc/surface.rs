@@ -119,6 +119,22 @@ struct Near {
     pairs: Vec<Pair>,
 }
 
+/// Lower bounds ℓ of the gaps of a collision-detection sweep's candidates at its start `from`
+/// (a Newton iterate; the gaps themselves where they were measured), with the contact nodes'
+/// positions there: an evaluation on the sweep leaves out the pairs that cannot be active.
+/// A pair's distance changes by at most the sum δ of its two primitives' largest nodal moves
+/// (each closest point is a convex combination of its primitive's nodes), so at a state
+/// whose moves from `from` give δ its gap is at least ℓ − δ − μ, the margin μ (10⁻⁵ of four
+/// times the longest reference edge) covering round-off and the switch of nearly parallel
+/// edges to their endpoint distances (`primitives::edge_edge_feature`, below a sine of
+/// 10⁻⁵). A pair with ℓ − δ − μ > 1.05 d̂ is inactive and left out — the same result: it
+/// contributes nothing (gap ≥ d̂) — and that bound is kept as its ℓ at the new state.
+struct StartGaps {
+    pairs: Arc<Vec<Pair>>,
+    gaps: Vec<f64>,
+    from: Vec<Vector3<f64>>,
+}
+
 /// Evaluation of one active pair.
 #[derive(Clone, Debug)]
 struct Term {
@@ -187,9 +203,17 @@ pub struct SurfaceContact {
     last_u: Vec<Vector3<f64>>,
     /// The candidates of the last evaluation with derivatives (a Newton iterate, at
     /// `last_u`) and their gaps there: the start of the next collision-detection sweep.
-    start_gaps: Option<(Arc<Vec<Pair>>, Vec<f64>)>,
+    /// Each gap with whether it was measured (else a lower bound, `StartGaps`).
+    start_gaps: Option<(Arc<Vec<Pair>>, Vec<(f64, bool)>)>,
     /// Buffer of the per-feature barrier derivatives (`barrier_derivatives`).
     derivatives: Vec<Derivative>,
+    /// The last sweep's gaps at its start (see [`StartGaps`]).
+    start: Mutex<Option<StartGaps>>,
+    /// Absolute part of the [`StartGaps`] margin: 10⁻⁵ of four times the longest reference
+    /// edge.
+    bound_margin: f64,
+    /// Node → index in `points` (usize::MAX for a node without contact).
+    point_index: Vec<usize>,
     last_potential: f64,
     search_s: f64,
     /// Wall time split, for the summary.
@@ -293,6 +317,12 @@ impl SurfaceContact {
         let near_margin = NEAR_MARGIN * reach;
         let grow = |v: &[f64]| v.iter().map(|r| r + near_margin).collect::<Vec<f64>>();
         let near_pads = (grow(&sweep_pads.0), grow(&sweep_pads.1), grow(&sweep_pads.2));
+        let longest = edges.iter().map(|e| (model.x0[e[0]] - model.x0[e[1]]).norm()).fold(0.0, f64::max);
+        let bound_margin = 1e-5 * 4.0 * longest;
+        let mut point_index = vec![usize::MAX; n];
+        for (i, &a) in points.iter().enumerate() {
+            point_index[a] = i;
+        }
         Self {
             x_ref: model.x0.clone(),
             points,
@@ -326,6 +356,9 @@ impl SurfaceContact {
             last_u: Vec::new(),
             start_gaps: None,
             derivatives: Vec::new(),
+            start: Mutex::new(None),
+            bound_margin,
+            point_index,
             last_potential: 0.0,
             search_s: 0.0,
             timings: std::sync::Mutex::new(SurfaceTimings::default()),
@@ -357,6 +390,42 @@ impl SurfaceContact {
             }
         }
         swept.unwrap_or_else(|| Arc::new(self.pairs(&[x], &self.pads())))
+    }
+
+    /// For candidates `pairs` at `x`: per pair certainly inactive by the bound of
+    /// [`StartGaps`], that lower bound of its gap; NaN for the others (None when `pairs` are
+    /// not those of the last sweep).
+    fn inactive_by_bound(&self, pairs: &Arc<Vec<Pair>>, x: &(dyn Fn(usize) -> Vector3<f64> + Sync)) -> Option<Vec<f64>> {
+        let guard = self.start.lock().ok()?;
+        let st = guard.as_ref()?;
+        if !Arc::ptr_eq(&st.pairs, pairs) || st.gaps.len() != pairs.len() || st.from.len() != self.points.len() {
+            return None;
+        }
+        let moves: Vec<f64> = self.points.iter().zip(&st.from).map(|(&a, p)| (x(a) - p).norm()).collect();
+        let mv = |a: usize| moves[self.point_index[a]];
+        let mut out = Vec::new();
+        pairs
+            .par_iter()
+            .zip(&st.gaps)
+            .map(|(&(kind, _, nodes, c), &g0)| {
+                let m = nodes.map(mv);
+                let delta = match kind {
+                    Kind::PointTriangle => m[0] + m[1].max(m[2]).max(m[3]),
+                    Kind::EdgeEdge => m[0].max(m[1]) + m[2].max(m[3]),
+                };
+                let bound = g0 - delta * (1.0 + 1e-12) - self.bound_margin;
+                if bound > c.dhat * 1.05 {
+                    bound
+                } else {
+                    f64::NAN
+                }
+            })
+            .collect_into_vec(&mut out);
+        if let Ok(mut tm) = self.timings.lock() {
+            tm.pairs_measured += pairs.len();
+            tm.pairs_bounded += out.iter().filter(|b| !b.is_nan()).count();
+        }
+        Some(out)
     }
 
     /// The energy κ_p m_p b(d, d̂_p) of one candidate pair on `nodes` at positions `xs`, as
@@ -392,20 +461,30 @@ impl SurfaceContact {
     /// A pair at or through zero gap has infinite energy.
     fn evaluate(&self, model: &Model, state: &State, derivatives: bool) -> Vec<Term> {
         let x = |a: usize| model.x0[a] + state.u[a];
-        self.evaluate_pairs(&self.candidates_at(&x), &x, derivatives, None)
+        let pairs = self.candidates_at(&x);
+        let skip = self.inactive_by_bound(&pairs, &x);
+        self.evaluate_pairs(&pairs, &x, derivatives, skip.as_deref(), None)
     }
 
     /// [`SurfaceContact::evaluate`] over the candidates `pairs` at positions `x`; with
     /// `gaps`, also every candidate's gap d = dist − c_p (active or not), in the order of
     /// `pairs`.
-    fn evaluate_pairs<X: Fn(usize) -> Vector3<f64> + Sync>(&self, pairs: &[Pair], x: &X, derivatives: bool, gaps: Option<&mut Vec<f64>>) -> Vec<Term> {
-        let term = |&(kind, key, nodes, c): &Pair, gap_out: Option<&mut f64>| {
+    fn evaluate_pairs<X: Fn(usize) -> Vector3<f64> + Sync>(&self, pairs: &[Pair], x: &X, derivatives: bool, skip: Option<&[f64]>, gaps: Option<&mut Vec<(f64, bool)>>) -> Vec<Term> {
+        let term = |i: usize, gap_out: Option<&mut (f64, bool)>| {
+            // Certainly inactive (`StartGaps`): not measured; its lower bound is kept.
+            if let Some(bound) = skip.map(|s| s[i]).filter(|b| !b.is_nan()) {
+                if let Some(g) = gap_out {
+                    *g = (bound, false);
+                }
+                return None;
+            }
+            let (kind, key, nodes, c) = pairs[i];
             let xs = nodes.map(x);
             let (feat, weights) = Self::feature(kind, &xs);
             let dist = squared_distance_value(feat, &xs).sqrt();
             let gap = dist - c.offset;
             if let Some(g) = gap_out {
-                *g = gap;
+                *g = (gap, true);
             }
             if gap >= c.dhat {
                 return None;
@@ -449,19 +528,20 @@ impl SurfaceContact {
         match gaps {
             Some(g) => {
                 g.clear();
-                g.resize(pairs.len(), f64::NAN);
-                pairs.par_iter().zip(g.par_iter_mut()).filter_map(|(p, g)| term(p, Some(g))).collect()
+                g.resize(pairs.len(), (f64::NAN, false));
+                g.par_iter_mut().enumerate().filter_map(|(i, g)| term(i, Some(g))).collect()
             }
-            None => pairs.par_iter().filter_map(|p| term(p, None)).collect(),
+            None => (0..pairs.len()).into_par_iter().filter_map(|i| term(i, None)).collect(),
         }
     }
 
     /// The gap of every pair of `pairs` at `from` where the last Newton evaluation
     /// (`add_coupled`) found it — at that very state, bit for bit, among its candidates —
-    /// else NaN. Both candidate lists are in the broad phase's order (point–triangle pairs
+    /// with whether it was measured (else a lower bound, `StartGaps`); (NaN, false) where
+    /// not found. Both candidate lists are in the broad phase's order (point–triangle pairs
     /// by point and triangle, then edge–edge pairs by edges), so one merge finds them.
-    fn gaps_at_start(&self, pairs: &[Pair], from: &State) -> Vec<f64> {
-        let mut out = vec![f64::NAN; pairs.len()];
+    fn gaps_at_start(&self, pairs: &[Pair], from: &State) -> Vec<(f64, bool)> {
+        let mut out = vec![(f64::NAN, false); pairs.len()];
         let Some((known, gaps)) = self.start_gaps.as_ref() else { return out };
         let same = |a: &Vector3<f64>, b: &Vector3<f64>| a.iter().zip(b.iter()).all(|(p, q)| p.to_bits() == q.to_bits());
         if self.last_u.len() != self.points.len() || !self.points.iter().zip(&self.last_u).all(|(&a, u)| same(&from.u[a], u)) {
@@ -523,7 +603,8 @@ impl NodalForces for SurfaceContact {
         let x = |a: usize| model.x0[a] + state.u[a];
         let candidates = self.candidates_at(&x);
         let mut gaps = self.start_gaps.take().map(|g| g.1).unwrap_or_default();
-        let terms = self.evaluate_pairs(&candidates, &x, true, Some(&mut gaps));
+        let skip = self.inactive_by_bound(&candidates, &x);
+        let terms = self.evaluate_pairs(&candidates, &x, true, skip.as_deref(), Some(&mut gaps));
         // Kept for the collision detection of the step from this state (`max_step`).
         self.start_gaps = Some((candidates, gaps));
         let fr = self.friction_terms(&x, true);
@@ -580,8 +661,13 @@ impl NodalForces for SurfaceContact {
         // The active pairs' energies alone, in the order of `evaluate`'s terms (an indexed
         // collect, summed in order below).
         let pairs = self.candidates_at(&x);
+        let skip = self.inactive_by_bound(&pairs, &x);
         let mut energies: Vec<Option<f64>> = Vec::new();
-        pairs.par_iter().map(|(kind, _, nodes, c)| self.pair_energy(*kind, nodes, &nodes.map(x), c)).collect_into_vec(&mut energies);
+        pairs
+            .par_iter()
+            .enumerate()
+            .map(|(i, (kind, _, nodes, c))| if skip.as_ref().is_some_and(|s| !s[i].is_nan()) { None } else { self.pair_energy(*kind, nodes, &nodes.map(x), c) })
+            .collect_into_vec(&mut energies);
         let fr = self.friction_terms(&x, false);
         self.search_s += t.elapsed().as_secs_f64();
         let mut pot = 0.0;
@@ -619,10 +705,11 @@ impl NodalForces for SurfaceContact {
         // The gaps at `from` the last Newton evaluation found (the same values gap_at(0)
         // computes: the same operations on the same positions).
         let start = self.gaps_at_start(&pairs, from);
-        let s = pairs
+        let mut outcome: Vec<(f64, f64)> = Vec::new();
+        pairs
             .par_iter()
             .zip(&start)
-            .map(|(&(kind, _, nodes, c), &g0)| {
+            .map(|(&(kind, _, nodes, c), &(g0, measured))| {
                 let a = nodes.map(x0);
                 let d: [Vector3<f64>; 4] = std::array::from_fn(|k| x1(nodes[k]) - a[k]);
                 // The distance does not change when all four nodes move alike: bound the rate
@@ -634,18 +721,29 @@ impl NodalForces for SurfaceContact {
                     Kind::PointTriangle => (r[0], r[1].max(r[2]).max(r[3])),
                     Kind::EdgeEdge => (r[0].max(r[1]), r[2].max(r[3])),
                 };
-                if m1 + m2 == 0.0 {
-                    return 1.0;
-                }
                 let gap_at = |s: f64| {
                     let xs: [Vector3<f64>; 4] = std::array::from_fn(|k| a[k] + d[k] * s);
                     let (feat, _) = Self::feature(kind, &xs);
                     squared_distance_value(feat, &xs).sqrt() - c.offset
                 };
-                let g0 = if g0.is_nan() || !d.iter().all(|v| v.iter().all(|c| c.is_finite())) { gap_at(0.0) } else { g0 };
-                conservative_advancement(g0, m1 + m2, CCD_CLOSE, 100, |s| Some(gap_at(s)))
+                if m1 + m2 == 0.0 {
+                    return (1.0, g0);
+                }
+                let rate = m1 + m2;
+                if !measured && CCD_CLOSE * g0 >= rate * (1.0 + 1e-9) {
+                    // The gap is at least g0 (`StartGaps`): advancement takes the whole step
+                    // at once, as it would from the gap itself.
+                    return (1.0, g0);
+                }
+                let g0 = if !measured || !d.iter().all(|v| v.iter().all(|c| c.is_finite())) { gap_at(0.0) } else { g0 };
+                (conservative_advancement(g0, rate, CCD_CLOSE, 100, |s| Some(gap_at(s))), g0)
             })
-            .reduce(|| 1.0, f64::min);
+            .collect_into_vec(&mut outcome);
+        let s = outcome.iter().map(|o| o.0).fold(1.0, f64::min);
+        if let Ok(mut st) = self.start.lock() {
+            let gaps = outcome.iter().map(|o| o.1).collect();
+            *st = Some(StartGaps { pairs: pairs.clone(), gaps, from: self.points.iter().map(|&a| x0(a)).collect() });
+        }
         if let Ok(mut sw) = self.sweep.lock() {
             *sw = Some(Sweep::new(lo, hi, pairs));
         }
