@@ -241,6 +241,11 @@ pub(super) struct BlockSlots {
     node_slots: Vec<Option<[usize; 9]>>,
     pairs: Vec<(usize, usize)>,
     pair_slots: Vec<Option<[usize; 9]>>,
+    /// The positions of every pair block met since the pattern changed, sorted by pair: an
+    /// assembly whose set of pairs differs from the last one's (a pair came or went, and the
+    /// order of all of them changed) looks each pair up here with one binary search instead
+    /// of nine in the pattern's columns.
+    known: Vec<((usize, usize), Option<[usize; 9]>)>,
 }
 
 impl BlockSlots {
@@ -277,7 +282,23 @@ impl BlockSlots {
     pub(super) fn add_pair_blocks(&mut self, model: &Model, col_ptr: &[usize], row_idx: &[usize], values: &mut [f64], blocks: &[(usize, usize, Matrix3<f64>)]) -> Vec<(usize, usize)> {
         if self.pairs.len() != blocks.len() || self.pairs.iter().zip(blocks).any(|(&(a, b), blk)| (a, b) != (blk.0, blk.1)) {
             self.pairs = blocks.iter().map(|b| (b.0, b.1)).collect();
-            self.pair_slots = blocks.iter().map(|b| pair_slots(model, col_ptr, row_idx, b.0, b.1)).collect();
+            let mut met = Vec::new();
+            self.pair_slots = blocks
+                .iter()
+                .map(|b| match self.known.binary_search_by_key(&(b.0, b.1), |k| k.0) {
+                    Ok(i) => self.known[i].1,
+                    Err(_) => {
+                        let slots = pair_slots(model, col_ptr, row_idx, b.0, b.1);
+                        met.push(((b.0, b.1), slots));
+                        slots
+                    }
+                })
+                .collect();
+            if !met.is_empty() {
+                self.known.extend(met);
+                self.known.sort_unstable_by_key(|k| k.0);
+                self.known.dedup_by_key(|k| k.0);
+            }
         }
         let mut outside = Vec::new();
         for (&(a, b, ref j), slots) in blocks.iter().zip(&self.pair_slots) {

@@ -148,23 +148,31 @@ pub fn line_line(a0: &Vector3<f64>, a1: &Vector3<f64>, b0: &Vector3<f64>, b1: &V
 /// canonical features of `potential.rs` do), with (F′, F″) = `dq(q)`. Returns m, the
 /// gradient in slots 0..m and the upper blocks (i ≤ j < m) of the Hessian.
 pub fn chain(f: Feature, x: &[Vector3<f64>; 4], dq: impl Fn(f64) -> (f64, f64)) -> (usize, [Vector3<f64>; 4], [[Matrix3<f64>; 4]; 4]) {
-    fn fill<const M: usize, const P: usize>(d: &SquaredDistance<M, P>, dq: impl Fn(f64) -> (f64, f64)) -> (usize, [Vector3<f64>; 4], [[Matrix3<f64>; 4]; 4]) {
+    let mut g = [Vector3::zeros(); 4];
+    let mut h = [[Matrix3::zeros(); 4]; 4];
+    let m = chain_into(f, x, dq, &mut g, &mut h);
+    (m, g, h)
+}
+
+/// [`chain`] written into `g` and `h` in place: returns m and sets `g[i]` and `h[i][j]`
+/// for i ≤ j < m only, leaving the other entries as they were (a caller reusing a buffer
+/// reads no more than those).
+pub fn chain_into(f: Feature, x: &[Vector3<f64>; 4], dq: impl Fn(f64) -> (f64, f64), g: &mut [Vector3<f64>; 4], h: &mut [[Matrix3<f64>; 4]; 4]) -> usize {
+    fn fill<const M: usize, const P: usize>(d: &SquaredDistance<M, P>, dq: impl Fn(f64) -> (f64, f64), g: &mut [Vector3<f64>; 4], h: &mut [[Matrix3<f64>; 4]; 4]) -> usize {
         let (f1, f2) = dq(d.value);
-        let mut g = [Vector3::zeros(); 4];
-        let mut h = [[Matrix3::zeros(); 4]; 4];
         for i in 0..M {
             g[i] = d.gradient(i) * f1;
             for j in i..M {
                 h[i][j] = d.chain_hessian(i, j, f1, f2);
             }
         }
-        (M, g, h)
+        M
     }
     match f {
-        Feature::PointPoint(..) => fill(&point_point(&x[0], &x[1]), dq),
-        Feature::PointEdge(..) => fill(&point_line(&x[0], &x[1], &x[2]), dq),
-        Feature::PointPlane(..) => fill(&point_plane(&x[0], &x[1], &x[2], &x[3]), dq),
-        Feature::LineLine(..) => fill(&line_line(&x[0], &x[1], &x[2], &x[3]), dq),
+        Feature::PointPoint(..) => fill(&point_point(&x[0], &x[1]), dq, g, h),
+        Feature::PointEdge(..) => fill(&point_line(&x[0], &x[1], &x[2]), dq, g, h),
+        Feature::PointPlane(..) => fill(&point_plane(&x[0], &x[1], &x[2], &x[3]), dq, g, h),
+        Feature::LineLine(..) => fill(&line_line(&x[0], &x[1], &x[2], &x[3]), dq, g, h),
     }
 }
 

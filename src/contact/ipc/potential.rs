@@ -120,6 +120,11 @@ pub(super) struct Derivative {
 }
 
 impl Derivative {
+    /// All zero, on no nodes (m = 0).
+    pub(super) fn zero() -> Self {
+        Self { nodes: [0; 4], m: 0, g: [Vector3::zeros(); 4], h: [[Matrix3::zeros(); 4]; 4] }
+    }
+
     /// The block (i, j) for any order of i, j.
     fn block(&self, i: usize, j: usize) -> Matrix3<f64> {
         if i <= j {
@@ -151,6 +156,14 @@ pub(super) fn group(pairs: impl Iterator<Item = (FeatureKey, Scalar)>) -> Vec<(F
 /// Gradient and Hessian of E(dist_f(x)) = Σ_p e_p(dist_f) (see the module comment) in the
 /// feature's own nodes, at positions `x`, by the closed forms of [`distance`].
 pub(super) fn derivative(key: &FeatureKey, s: &Scalar, x: &(dyn Fn(usize) -> Vector3<f64> + Sync)) -> Derivative {
+    let mut d = Derivative::zero();
+    derivative_into(key, s, x, &mut d);
+    d
+}
+
+/// [`derivative`] written into `out` in place (a reused buffer: its gradient and Hessian
+/// entries beyond the feature's m nodes are left as they were, and nothing reads them).
+pub(super) fn derivative_into(key: &FeatureKey, s: &Scalar, x: &(dyn Fn(usize) -> Vector3<f64> + Sync), out: &mut Derivative) {
     let (nodes, _, f) = key.nodes();
     let xs = nodes.map(x);
     // E as a function of the squared distance q = dist²: dE/dq = E′/(2 dist),
@@ -160,8 +173,8 @@ pub(super) fn derivative(key: &FeatureKey, s: &Scalar, x: &(dyn Fn(usize) -> Vec
         let (dd, ddd) = (0.5 / dist, -0.25 / (dist * dist * dist));
         (s.e1 * dd, s.e2 * dd * dd + s.e1 * ddd)
     };
-    let (m, g, h) = distance::chain(f, &xs, chain);
-    Derivative { nodes, m, g, h }
+    out.nodes = nodes;
+    out.m = distance::chain_into(f, &xs, chain, &mut out.g, &mut out.h);
 }
 
 /// `d` in the four nodes `nodes` (the feature's nodes are among them): gradient per node
@@ -256,15 +269,22 @@ impl Blocks {
     /// Forces and blocks of a potential of r = Σ_k w_k x_k (friction): gradient w_k g and
     /// Hessian blocks w_i w_j K; slots with w_k = 0 contribute nothing and are skipped.
     pub(super) fn add_weighted(&mut self, nodes: &[usize; 4], weights: &[f64; 4], g: &Vector3<f64>, k: Option<&Matrix3<f64>>, f_ext: &mut [f64]) {
-        let used: Vec<usize> = (0..4).filter(|&s| weights[s] != 0.0).collect();
-        for &s in &used {
+        // The used slots and their nodes in fixed arrays (no allocation per pair).
+        let (mut slots, mut sub, mut n) = ([0usize; 4], [0usize; 4], 0);
+        for s in 0..4 {
+            if weights[s] != 0.0 {
+                (slots[n], sub[n]) = (s, nodes[s]);
+                n += 1;
+            }
+        }
+        let used = &slots[..n];
+        for &s in used {
             for c in 0..3 {
                 f_ext[NODE_DOFS * nodes[s] + c] -= weights[s] * g[c];
             }
         }
         let Some(k) = k else { return };
-        let sub: Vec<usize> = used.iter().map(|&s| nodes[s]).collect();
-        self.add(&sub, |i, j| k * (weights[used[i]] * weights[used[j]]));
+        self.add(&sub[..n], |i, j| k * (weights[used[i]] * weights[used[j]]));
     }
 }
 

@@ -54,4 +54,8 @@ pub struct SurfaceTimings {
     /// Of them, those that searched the trees for their candidates (the others filtered
     /// the candidates kept from an earlier sweep, `surface::Near`).
     pub ccd_searches: usize,
+    /// Candidate pairs measured by the evaluations on a sweep, and those among them left
+    /// out as certainly inactive by the bound of [`super::surface`]'s `StartGaps`.
+    pub pairs_measured: usize,
+    pub pairs_bounded: usize,
 }

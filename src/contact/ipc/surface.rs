@@ -55,7 +55,7 @@ use rayon::prelude::*;
 
 use super::broad_phase::{Sweep, Trees};
 use super::friction::{Friction, FrictionTerm};
-use super::potential::{derivative, group, mollified_derivative, Blocks, Derivative, FeatureKey, FxMap, Scalar};
+use super::potential::{derivative_into, group, mollified_derivative, Blocks, Derivative, FeatureKey, FxMap, Scalar};
 pub use super::report::{SurfaceIncrement, SurfaceTimings};
 pub use super::settings::{SurfaceSettings, SurfaceSetup};
 use super::primitives::{edge_edge_feature, mollifier, point_triangle_feature, squared_distance_value, Feature};
@@ -117,6 +117,22 @@ struct Near {
     lo: Vec<Vector3<f64>>,
     hi: Vec<Vector3<f64>>,
     pairs: Vec<Pair>,
+}
+
+/// Lower bounds ℓ of the gaps of a collision-detection sweep's candidates at its start `from`
+/// (a Newton iterate; the gaps themselves where they were measured), with the contact nodes'
+/// positions there: an evaluation on the sweep leaves out the pairs that cannot be active.
+/// A pair's distance changes by at most the sum δ of its two primitives' largest nodal moves
+/// (each closest point is a convex combination of its primitive's nodes), so at a state
+/// whose moves from `from` give δ its gap is at least ℓ − δ − μ, the margin μ (10⁻⁵ of four
+/// times the longest reference edge) covering round-off and the switch of nearly parallel
+/// edges to their endpoint distances (`primitives::edge_edge_feature`, below a sine of
+/// 10⁻⁵). A pair with ℓ − δ − μ > 1.05 d̂ is inactive and left out — the same result: it
+/// contributes nothing (gap ≥ d̂) — and that bound is kept as its ℓ at the new state.
+struct StartGaps {
+    pairs: Arc<Vec<Pair>>,
+    gaps: Vec<f64>,
+    from: Vec<Vector3<f64>>,
 }
 
 /// Evaluation of one active pair.
@@ -185,6 +201,19 @@ pub struct SurfaceContact {
     last_friction: Vec<FrictionTerm>,
     /// Contact nodes' displacements at the last evaluation.
     last_u: Vec<Vector3<f64>>,
+    /// The candidates of the last evaluation with derivatives (a Newton iterate, at
+    /// `last_u`) and their gaps there: the start of the next collision-detection sweep.
+    /// Each gap with whether it was measured (else a lower bound, `StartGaps`).
+    start_gaps: Option<(Arc<Vec<Pair>>, Vec<(f64, bool)>)>,
+    /// Buffer of the per-feature barrier derivatives (`barrier_derivatives`).
+    derivatives: Vec<Derivative>,
+    /// The last sweep's gaps at its start (see [`StartGaps`]).
+    start: Mutex<Option<StartGaps>>,
+    /// Absolute part of the [`StartGaps`] margin: 10⁻⁵ of four times the longest reference
+    /// edge.
+    bound_margin: f64,
+    /// Node → index in `points` (usize::MAX for a node without contact).
+    point_index: Vec<usize>,
     last_potential: f64,
     search_s: f64,
     /// Wall time split, for the summary.
@@ -288,6 +317,12 @@ impl SurfaceContact {
         let near_margin = NEAR_MARGIN * reach;
         let grow = |v: &[f64]| v.iter().map(|r| r + near_margin).collect::<Vec<f64>>();
         let near_pads = (grow(&sweep_pads.0), grow(&sweep_pads.1), grow(&sweep_pads.2));
+        let longest = edges.iter().map(|e| (model.x0[e[0]] - model.x0[e[1]]).norm()).fold(0.0, f64::max);
+        let bound_margin = 1e-5 * 4.0 * longest;
+        let mut point_index = vec![usize::MAX; n];
+        for (i, &a) in points.iter().enumerate() {
+            point_index[a] = i;
+        }
         Self {
             x_ref: model.x0.clone(),
             points,
@@ -319,6 +354,11 @@ impl SurfaceContact {
             last: Vec::new(),
             last_friction: Vec::new(),
             last_u: Vec::new(),
+            start_gaps: None,
+            derivatives: Vec::new(),
+            start: Mutex::new(None),
+            bound_margin,
+            point_index,
             last_potential: 0.0,
             search_s: 0.0,
             timings: std::sync::Mutex::new(SurfaceTimings::default()),
@@ -338,6 +378,81 @@ impl SurfaceContact {
         }
     }
 
+    /// The candidate pairs at configuration `x`: the last sweep's when `x` lies within it,
+    /// else those of a search of the trees.
+    fn candidates_at(&self, x: &(dyn Fn(usize) -> Vector3<f64> + Sync)) -> Arc<Vec<Pair>> {
+        let swept = self.swept_pairs(x);
+        if let Ok(mut tm) = self.timings.lock() {
+            if swept.is_some() {
+                tm.evaluations_on_sweep += 1;
+            } else {
+                tm.evaluations_searched += 1;
+            }
+        }
+        swept.unwrap_or_else(|| Arc::new(self.pairs(&[x], &self.pads())))
+    }
+
+    /// For candidates `pairs` at `x`: per pair certainly inactive by the bound of
+    /// [`StartGaps`], that lower bound of its gap; NaN for the others (None when `pairs` are
+    /// not those of the last sweep).
+    fn inactive_by_bound(&self, pairs: &Arc<Vec<Pair>>, x: &(dyn Fn(usize) -> Vector3<f64> + Sync)) -> Option<Vec<f64>> {
+        let guard = self.start.lock().ok()?;
+        let st = guard.as_ref()?;
+        if !Arc::ptr_eq(&st.pairs, pairs) || st.gaps.len() != pairs.len() || st.from.len() != self.points.len() {
+            return None;
+        }
+        let moves: Vec<f64> = self.points.iter().zip(&st.from).map(|(&a, p)| (x(a) - p).norm()).collect();
+        let mv = |a: usize| moves[self.point_index[a]];
+        let mut out = Vec::new();
+        pairs
+            .par_iter()
+            .zip(&st.gaps)
+            .map(|(&(kind, _, nodes, c), &g0)| {
+                let m = nodes.map(mv);
+                let delta = match kind {
+                    Kind::PointTriangle => m[0] + m[1].max(m[2]).max(m[3]),
+                    Kind::EdgeEdge => m[0].max(m[1]) + m[2].max(m[3]),
+                };
+                let bound = g0 - delta * (1.0 + 1e-12) - self.bound_margin;
+                if bound > c.dhat * 1.05 {
+                    bound
+                } else {
+                    f64::NAN
+                }
+            })
+            .collect_into_vec(&mut out);
+        if let Ok(mut tm) = self.timings.lock() {
+            tm.pairs_measured += pairs.len();
+            tm.pairs_bounded += out.iter().filter(|b| !b.is_nan()).count();
+        }
+        Some(out)
+    }
+
+    /// The energy κ_p m_p b(d, d̂_p) of one candidate pair on `nodes` at positions `xs`, as
+    /// [`SurfaceContact::evaluate`] forms it (the same operations, the same value to the bit):
+    /// None when inactive (gap ≥ d̂), infinite at or through zero gap.
+    fn pair_energy(&self, kind: Kind, nodes: &[usize; 4], xs: &[Vector3<f64>; 4], c: &Constants) -> Option<f64> {
+        let (feat, _) = Self::feature(kind, xs);
+        let gap = squared_distance_value(feat, xs).sqrt() - c.offset;
+        if gap >= c.dhat {
+            return None;
+        }
+        if gap <= 0.0 {
+            return Some(f64::INFINITY);
+        }
+        let kap = nodes.iter().map(|&a| self.kappa[a]).sum::<f64>() / 4.0;
+        let (b, _, _) = barrier(gap, c.dhat);
+        let mut m = 1.0;
+        if kind == Kind::EdgeEdge {
+            let (u, v) = (xs[1] - xs[0], xs[3] - xs[2]);
+            let cs2 = u.cross(&v).norm_squared();
+            if cs2 < c.eps {
+                m = mollifier(cs2, c.eps).0;
+            }
+        }
+        Some(kap * b * m)
+    }
+
     /// The active pairs at `state` (gap below d̂): gap, energy κ_p m_p b(d, d̂_p), normal force
     /// and closest-point weights, with the energy's first two derivatives in the distance of
     /// the pair's closest feature (summed per feature and differentiated in the nodes by
@@ -346,75 +461,118 @@ impl SurfaceContact {
     /// A pair at or through zero gap has infinite energy.
     fn evaluate(&self, model: &Model, state: &State, derivatives: bool) -> Vec<Term> {
         let x = |a: usize| model.x0[a] + state.u[a];
-        let swept = self.swept_pairs(&x);
-        if let Ok(mut tm) = self.timings.lock() {
-            if swept.is_some() {
-                tm.evaluations_on_sweep += 1;
-            } else {
-                tm.evaluations_searched += 1;
+        let pairs = self.candidates_at(&x);
+        let skip = self.inactive_by_bound(&pairs, &x);
+        self.evaluate_pairs(&pairs, &x, derivatives, skip.as_deref(), None)
+    }
+
+    /// [`SurfaceContact::evaluate`] over the candidates `pairs` at positions `x`; with
+    /// `gaps`, also every candidate's gap d = dist − c_p (active or not), in the order of
+    /// `pairs`.
+    fn evaluate_pairs<X: Fn(usize) -> Vector3<f64> + Sync>(&self, pairs: &[Pair], x: &X, derivatives: bool, skip: Option<&[f64]>, gaps: Option<&mut Vec<(f64, bool)>>) -> Vec<Term> {
+        let term = |i: usize, gap_out: Option<&mut (f64, bool)>| {
+            // Certainly inactive (`StartGaps`): not measured; its lower bound is kept.
+            if let Some(bound) = skip.map(|s| s[i]).filter(|b| !b.is_nan()) {
+                if let Some(g) = gap_out {
+                    *g = (bound, false);
+                }
+                return None;
             }
-        }
-        let pairs = swept.unwrap_or_else(|| Arc::new(self.pairs(&[&x], &self.pads())));
-        pairs
-            .par_iter()
-            .filter_map(|&(kind, key, nodes, c)| {
-                let xs = nodes.map(x);
-                let (feat, weights) = Self::feature(kind, &xs);
-                let dist = squared_distance_value(feat, &xs).sqrt();
-                let gap = dist - c.offset;
-                if gap >= c.dhat {
-                    return None;
-                }
-                let kap = nodes.iter().map(|&a| self.kappa[a]).sum::<f64>() / 4.0;
-                let r: Vector3<f64> = (0..4).map(|k| xs[k] * weights[k]).sum();
-                let normal = if dist > 0.0 { r / dist } else { Vector3::zeros() };
-                let thin = 2.0 * nodes.iter().map(|&a| self.half[a]).fold(f64::INFINITY, f64::min);
-                let feature = FeatureKey::of(feat, &nodes);
-                let inf = Scalar { e: f64::INFINITY, e1: 0.0, e2: 0.0 };
-                let mut term = Term { kind, key, nodes, feature, scalar: inf, mollified: None, gap, dhat: c.dhat, thin, energy: f64::INFINITY, force: f64::INFINITY, normal, weights };
-                if gap <= 0.0 {
-                    return Some(term);
-                }
-                let (b, b1, b2) = barrier(gap, c.dhat);
-                // κ b(√q − c_p) (× m(|e_a × e_b|²) for nearly parallel edges): its exact
-                // gradient and Hessian follow by second-order automatic differentiation of the
-                // squared distance q. The Hessian is not projected: a pair pressed onto a
-                // vertex or an edge of the other surface has a negative tangential stiffness
-                // κ b′ ∇²dist (the force turns as the point slides), and Newton without it
-                // stalls where plies slide on each other (the NBC sleeve in a static step
-                // stopped at a residual of 10⁻⁶ with a projected or Gauss–Newton tangent; it
-                // converges with the exact one).
-                let mut m = 1.0;
-                if kind == Kind::EdgeEdge {
-                    let (u, v) = (xs[1] - xs[0], xs[3] - xs[2]);
-                    let cs2 = u.cross(&v).norm_squared();
-                    if cs2 < c.eps {
-                        m = mollifier(cs2, c.eps).0;
-                        if derivatives {
-                            let f = Scalar { e: kap * b, e1: kap * b1, e2: kap * b2 };
-                            term.mollified = Some(Box::new(mollified_derivative(&nodes, &feature, &f, c.eps, &x)));
-                        }
+            let (kind, key, nodes, c) = pairs[i];
+            let xs = nodes.map(x);
+            let (feat, weights) = Self::feature(kind, &xs);
+            let dist = squared_distance_value(feat, &xs).sqrt();
+            let gap = dist - c.offset;
+            if let Some(g) = gap_out {
+                *g = (gap, true);
+            }
+            if gap >= c.dhat {
+                return None;
+            }
+            let kap = nodes.iter().map(|&a| self.kappa[a]).sum::<f64>() / 4.0;
+            let r: Vector3<f64> = (0..4).map(|k| xs[k] * weights[k]).sum();
+            let normal = if dist > 0.0 { r / dist } else { Vector3::zeros() };
+            let thin = 2.0 * nodes.iter().map(|&a| self.half[a]).fold(f64::INFINITY, f64::min);
+            let feature = FeatureKey::of(feat, &nodes);
+            let inf = Scalar { e: f64::INFINITY, e1: 0.0, e2: 0.0 };
+            let mut term = Term { kind, key, nodes, feature, scalar: inf, mollified: None, gap, dhat: c.dhat, thin, energy: f64::INFINITY, force: f64::INFINITY, normal, weights };
+            if gap <= 0.0 {
+                return Some(term);
+            }
+            let (b, b1, b2) = barrier(gap, c.dhat);
+            // κ b(√q − c_p) (× m(|e_a × e_b|²) for nearly parallel edges): its exact
+            // gradient and Hessian follow by second-order automatic differentiation of the
+            // squared distance q. The Hessian is not projected: a pair pressed onto a
+            // vertex or an edge of the other surface has a negative tangential stiffness
+            // κ b′ ∇²dist (the force turns as the point slides), and Newton without it
+            // stalls where plies slide on each other (the NBC sleeve in a static step
+            // stopped at a residual of 10⁻⁶ with a projected or Gauss–Newton tangent; it
+            // converges with the exact one).
+            let mut m = 1.0;
+            if kind == Kind::EdgeEdge {
+                let (u, v) = (xs[1] - xs[0], xs[3] - xs[2]);
+                let cs2 = u.cross(&v).norm_squared();
+                if cs2 < c.eps {
+                    m = mollifier(cs2, c.eps).0;
+                    if derivatives {
+                        let f = Scalar { e: kap * b, e1: kap * b1, e2: kap * b2 };
+                        term.mollified = Some(Box::new(mollified_derivative(&nodes, &feature, &f, c.eps, x)));
                     }
                 }
-                term.scalar = Scalar { e: kap * b * m, e1: kap * b1, e2: kap * b2 };
-                term.energy = kap * b * m;
-                term.force = -kap * m * b1;
-                Some(term)
-            })
-            .collect()
+            }
+            term.scalar = Scalar { e: kap * b * m, e1: kap * b1, e2: kap * b2 };
+            term.energy = kap * b * m;
+            term.force = -kap * m * b1;
+            Some(term)
+        };
+        match gaps {
+            Some(g) => {
+                g.clear();
+                g.resize(pairs.len(), (f64::NAN, false));
+                g.par_iter_mut().enumerate().filter_map(|(i, g)| term(i, Some(g))).collect()
+            }
+            None => (0..pairs.len()).into_par_iter().filter_map(|i| term(i, None)).collect(),
+        }
+    }
+
+    /// The gap of every pair of `pairs` at `from` where the last Newton evaluation
+    /// (`add_coupled`) found it — at that very state, bit for bit, among its candidates —
+    /// with whether it was measured (else a lower bound, `StartGaps`); (NaN, false) where
+    /// not found. Both candidate lists are in the broad phase's order (point–triangle pairs
+    /// by point and triangle, then edge–edge pairs by edges), so one merge finds them.
+    fn gaps_at_start(&self, pairs: &[Pair], from: &State) -> Vec<(f64, bool)> {
+        let mut out = vec![(f64::NAN, false); pairs.len()];
+        let Some((known, gaps)) = self.start_gaps.as_ref() else { return out };
+        let same = |a: &Vector3<f64>, b: &Vector3<f64>| a.iter().zip(b.iter()).all(|(p, q)| p.to_bits() == q.to_bits());
+        if self.last_u.len() != self.points.len() || !self.points.iter().zip(&self.last_u).all(|(&a, u)| same(&from.u[a], u)) {
+            return out;
+        }
+        let order = |p: &Pair| (p.0 == Kind::EdgeEdge, p.1);
+        let mut j = 0;
+        for (p, g) in pairs.iter().zip(out.iter_mut()) {
+            let k = order(p);
+            while j < known.len() && order(&known[j]) < k {
+                j += 1;
+            }
+            if j < known.len() && order(&known[j]) == k {
+                *g = gaps[j];
+            }
+        }
+        out
     }
 
     /// Forces and tangent blocks of the barrier terms: per closest feature for the pairs
     /// without mollifier, per pair for those with it.
-    fn barrier_derivatives(&self, terms: &[Term], x: &(dyn Fn(usize) -> Vector3<f64> + Sync)) -> Vec<Derivative> {
+    /// The per-feature derivatives go into `out` (a buffer kept between evaluations and
+    /// written in place: a derivative is 1.3 KB, and building, zeroing and moving each one
+    /// cost more than its arithmetic); the mollified pairs' are those of their terms.
+    fn barrier_derivatives(&self, terms: &[Term], x: &(dyn Fn(usize) -> Vector3<f64> + Sync), out: &mut Vec<Derivative>) {
         let grouped = group(terms.iter().filter(|t| t.mollified.is_none() && t.energy.is_finite()).map(|t| (t.feature, t.scalar)));
-        let n_mollified = terms.iter().filter(|t| t.mollified.is_some()).count();
-        let mut out: Vec<Derivative> = Vec::with_capacity(grouped.len() + n_mollified);
-        // Written in place (an indexed collect), not gathered in chunks and copied.
-        grouped.par_iter().map(|(k, s)| derivative(k, s, x)).collect_into_vec(&mut out);
-        out.reserve(n_mollified);
-        out.extend(terms.iter().filter_map(|t| t.mollified.as_ref().map(|e| (**e).clone())));
-        out
+        if out.len() < grouped.len() {
+            out.resize(grouped.len(), Derivative::zero());
+        }
+        out.truncate(grouped.len());
+        out.par_iter_mut().zip(&grouped).for_each(|(d, (k, s))| derivative_into(k, s, x, d));
     }
 
     /// Friction potentials of the committed pairs at `x`.
@@ -442,8 +600,13 @@ impl NodalForces for SurfaceContact {
 
     fn add_coupled(&mut self, model: &Model, state: &State, f_ext: &mut [f64], jacobian: &mut Vec<(usize, Matrix3<f64>)>, pairs: &mut Vec<(usize, usize, Matrix3<f64>)>) {
         let t = Instant::now();
-        let terms = self.evaluate(model, state, true);
         let x = |a: usize| model.x0[a] + state.u[a];
+        let candidates = self.candidates_at(&x);
+        let mut gaps = self.start_gaps.take().map(|g| g.1).unwrap_or_default();
+        let skip = self.inactive_by_bound(&candidates, &x);
+        let terms = self.evaluate_pairs(&candidates, &x, true, skip.as_deref(), Some(&mut gaps));
+        // Kept for the collision detection of the step from this state (`max_step`).
+        self.start_gaps = Some((candidates, gaps));
         let fr = self.friction_terms(&x, true);
         self.search_s += t.elapsed().as_secs_f64();
         let mut pot = 0.0;
@@ -460,9 +623,12 @@ impl NodalForces for SurfaceContact {
         if pot.is_finite() {
             // By reference: a derivative is 1.3 KB, and moving each out of the list cost
             // more than adding it.
-            for d in &self.barrier_derivatives(&terms, &x) {
+            let mut derivatives = std::mem::take(&mut self.derivatives);
+            self.barrier_derivatives(&terms, &x, &mut derivatives);
+            for d in derivatives.iter().chain(terms.iter().filter_map(|t| t.mollified.as_deref())) {
                 blocks.add_derivative(d, f_ext, true);
             }
+            self.derivatives = derivatives;
         }
         for ft in &fr {
             pot += ft.energy;
@@ -491,17 +657,26 @@ impl NodalForces for SurfaceContact {
     /// (`last`, used by `commit`) is left alone.
     fn potential_at(&mut self, model: &Model, state: &State) -> Option<f64> {
         let t = Instant::now();
-        let terms = self.evaluate(model, state, false);
         let x = |a: usize| model.x0[a] + state.u[a];
+        // The active pairs' energies alone, in the order of `evaluate`'s terms (an indexed
+        // collect, summed in order below).
+        let pairs = self.candidates_at(&x);
+        let skip = self.inactive_by_bound(&pairs, &x);
+        let mut energies: Vec<Option<f64>> = Vec::new();
+        pairs
+            .par_iter()
+            .enumerate()
+            .map(|(i, (kind, _, nodes, c))| if skip.as_ref().is_some_and(|s| !s[i].is_nan()) { None } else { self.pair_energy(*kind, nodes, &nodes.map(x), c) })
+            .collect_into_vec(&mut energies);
         let fr = self.friction_terms(&x, false);
         self.search_s += t.elapsed().as_secs_f64();
         let mut pot = 0.0;
-        for term in &terms {
-            if !term.energy.is_finite() {
+        for energy in energies.into_iter().flatten() {
+            if !energy.is_finite() {
                 pot = f64::INFINITY;
                 continue;
             }
-            pot += term.energy;
+            pot += energy;
         }
         for ft in &fr {
             pot += ft.energy;
@@ -527,9 +702,14 @@ impl NodalForces for SurfaceContact {
         let lo: Vec<Vector3<f64>> = self.points.iter().map(|&a| x0(a).inf(&x1(a))).collect();
         let hi: Vec<Vector3<f64>> = self.points.iter().map(|&a| x0(a).sup(&x1(a))).collect();
         let pairs = Arc::new(self.sweep_pairs(&x0, &x1, &lo, &hi));
-        let s = pairs
+        // The gaps at `from` the last Newton evaluation found (the same values gap_at(0)
+        // computes: the same operations on the same positions).
+        let start = self.gaps_at_start(&pairs, from);
+        let mut outcome: Vec<(f64, f64)> = Vec::new();
+        pairs
             .par_iter()
-            .map(|&(kind, _, nodes, c)| {
+            .zip(&start)
+            .map(|(&(kind, _, nodes, c), &(g0, measured))| {
                 let a = nodes.map(x0);
                 let d: [Vector3<f64>; 4] = std::array::from_fn(|k| x1(nodes[k]) - a[k]);
                 // The distance does not change when all four nodes move alike: bound the rate
@@ -541,17 +721,29 @@ impl NodalForces for SurfaceContact {
                     Kind::PointTriangle => (r[0], r[1].max(r[2]).max(r[3])),
                     Kind::EdgeEdge => (r[0].max(r[1]), r[2].max(r[3])),
                 };
-                if m1 + m2 == 0.0 {
-                    return 1.0;
-                }
                 let gap_at = |s: f64| {
                     let xs: [Vector3<f64>; 4] = std::array::from_fn(|k| a[k] + d[k] * s);
                     let (feat, _) = Self::feature(kind, &xs);
                     squared_distance_value(feat, &xs).sqrt() - c.offset
                 };
-                conservative_advancement(gap_at(0.0), m1 + m2, CCD_CLOSE, 100, |s| Some(gap_at(s)))
+                if m1 + m2 == 0.0 {
+                    return (1.0, g0);
+                }
+                let rate = m1 + m2;
+                if !measured && CCD_CLOSE * g0 >= rate * (1.0 + 1e-9) {
+                    // The gap is at least g0 (`StartGaps`): advancement takes the whole step
+                    // at once, as it would from the gap itself.
+                    return (1.0, g0);
+                }
+                let g0 = if !measured || !d.iter().all(|v| v.iter().all(|c| c.is_finite())) { gap_at(0.0) } else { g0 };
+                (conservative_advancement(g0, rate, CCD_CLOSE, 100, |s| Some(gap_at(s))), g0)
             })
-            .reduce(|| 1.0, f64::min);
+            .collect_into_vec(&mut outcome);
+        let s = outcome.iter().map(|o| o.0).fold(1.0, f64::min);
+        if let Ok(mut st) = self.start.lock() {
+            let gaps = outcome.iter().map(|o| o.1).collect();
+            *st = Some(StartGaps { pairs: pairs.clone(), gaps, from: self.points.iter().map(|&a| x0(a)).collect() });
+        }
         if let Ok(mut sw) = self.sweep.lock() {
             *sw = Some(Sweep::new(lo, hi, pairs));
         }
