@@ -43,6 +43,9 @@ pub struct RunOptions {
 /// Solves `built` (from `scene`), reporting progress, and writes VTU/PVD, summary.json and
 /// the monitor plot into the output directory.
 pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &mut dyn FnMut(&Progress)) -> Result<Summary, RunError> {
+    if crate::analysis_auto::is_auto(scene) {
+        return Err(RunError::Setup("the garment has ply_model Auto, which is solved in two passes (laminate, then discrete plies where they would slide): run it with analysis_auto::run (as plyshell solve and study do)".into()));
+    }
     let t0 = Instant::now();
     let seeded = match &built.imperfection {
         Some(imp) => Some(crate::solver::imperfection::seeded(&built.model, imp, &scene.solver).map_err(RunError::Setup)?),
