@@ -322,6 +322,7 @@ pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &m
     }
     summary.export_s = export_s;
     summary.final_positions = (0..model.n_nodes()).map(|n| model.position(&state, n).into()).collect();
+    summary.final_state = Some(state.clone());
     summary.wall_s = t0.elapsed().as_secs_f64();
     summary.peak_memory_mib = peak_memory_mib();
     if !problems.is_empty() {

@@ -83,8 +83,10 @@ pub fn run(scene: &Scene, file: &str, text: &str, options: &RunOptions, progress
     let first_summary = analysis::run(&first_scene, &first, &RunOptions { out_dir: if laminated { first_dir.clone() } else { options.out_dir.clone() } }, progress)?;
     let friction = if spec.interply.enabled { spec.interply.friction } else { 0.0 };
     let demands = match &first.garment {
-        Some(layout) if laminated => ply_auto::evaluate(&first_spec, &first.model, &first_summary.final_positions, layout, &first.seams, gravity(scene), friction)
-            .map_err(|m| RunError::Setup(format!("ply_model Auto: {m}")))?,
+        Some(layout) if laminated => {
+            let state = first_summary.final_state.as_ref().ok_or_else(|| RunError::Setup("ply_model Auto: the first pass left no state".into()))?;
+            ply_auto::evaluate(&first_spec, &first.model, state, layout, &first.seams, gravity(scene), friction).map_err(|m| RunError::Setup(format!("ply_model Auto: {m}")))?
+        }
         _ => Vec::new(),
     };
     let slides: Vec<String> = demands.iter().filter(|d| d.discrete).map(|d| d.panel.clone()).collect();

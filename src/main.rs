@@ -146,7 +146,7 @@ enum Command {
         #[arg(long, default_value = "out/body")]
         out: PathBuf,
     },
-    /// Solve a garment scene at increasing fidelity (mesh levels × laminate / discrete plies)
+    /// Solve a garment scene at increasing fidelity (mesh levels × laminate / Auto / discrete plies)
     /// and report each run's time and error against the finest discrete model: table, JSON
     /// and error-vs-time plot.
     Study {
@@ -161,7 +161,7 @@ enum Command {
         /// Extra runs with `element_size: Auto((tolerance: T))` (comma-separated tolerances).
         #[arg(long, value_delimiter = ',')]
         tolerances: Vec<f64>,
-        /// Only the discrete ply model (no laminate runs).
+        /// Only the discrete ply model (no laminate or Auto runs).
         #[arg(long)]
         discrete_only: bool,
         /// Also write every run's VTU/PVD and summary.json into OUT/<run>/.

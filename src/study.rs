@@ -1,5 +1,6 @@
 //! `plyshell study SCENE.ron`: the scene's garment solved at increasing fidelity — mesh
-//! levels (element size multipliers, or `Auto` tolerances) × ply models (laminate, discrete)
+//! levels (element size multipliers, or `Auto` tolerances) × ply models (laminate, `Auto`
+//! — laminate, then discrete plies where they would slide, `analysis_auto` —, discrete)
 //! — and each run's wall time and error against the finest discrete model: drape shape
 //! (RMS and largest distance between the deformed garment surfaces / garment size), seam
 //! forces, clearance to the bodies, drape coefficient where the scene measures it. Writes a

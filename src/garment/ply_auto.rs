@@ -7,17 +7,18 @@
 //! integrated over its band), and what keeps the plies together is read off equilibrium:
 //!
 //! - **Interface force.** The plies outside interface j (towards the director) are in
-//!   equilibrium under their membrane forces, their weight and the traction of the plies
-//!   inside: f_j = Σ_{k outside j} (Div P_k + ρ_k g) per reference area must be balanced by
-//!   the interface (P_k = F N_k the ply's first Piola–Kirchhoff membrane force; this is the
-//!   equilibrium integration of the interlaminar stresses, τ_xz(z) = −∫ (∂σ_x/∂x + ∂τ_xy/∂y)
-//!   dz, Jones §4.6 / Pipes & Pagano 1970, on the curved, deformed stack). Div P_k is taken
-//!   per element by the divergence theorem (finite volumes: Σ over the element's edges of
-//!   the mean of the two elements' tractions P ν ℓ, over the element's area), so its normal
-//!   component contains the membrane (Laplace) pressure N : b of the curved outer plies.
-//!   Boundary edges use the element's own traction: at a seam every ply is tied, and at a
-//!   free edge the interlaminar stresses are a boundary layer about a laminate thickness
-//!   wide (Pipes & Pagano 1970), below the panel's scale.
+//!   equilibrium under their internal forces, their weight and the traction of the plies
+//!   inside: f_j = Σ_{k outside j} (f_ext,k − f_int,k) at each node, over the node's
+//!   tributary area, must be balanced by the interface. f_int,k is ply k's share of the
+//!   element's own internal force vector (the element evaluated with a section that keeps
+//!   the laminate's thickness rule but only ply k's stress: Σ_k f_int,k is the laminate's
+//!   internal force, so at a free node of the converged state Σ_all f_j = 0 up to the
+//!   solver's tolerance — the discrete form of integrating the interlaminar stresses from
+//!   equilibrium, τ_xz(z) = −∫ (∂σ_x/∂x + ∂τ_xy/∂y) dz, Jones §4.6 / Pipes & Pagano 1970, on
+//!   the curved, deformed stack: its normal component holds the membrane (Laplace) pressure
+//!   of the curved outer plies and their transverse shear). f_ext,k = ρ_k g A_a, the ply's
+//!   weight on the node's tributary area A_a. Nodes of seam rows and fixed nodes carry tie
+//!   and support reactions through all plies and are left out (every ply is tied there).
 //! - **Friction.** With the director d, the interface pressure is p = max(−f_j·d, 0) and the
 //!   shear τ = |f_j − (f_j·d) d|; Coulomb friction holds τ ≤ μ p (μ the garment's inter-ply
 //!   friction; 0 without inter-ply contact). The excess τ_ex = max(τ − μ p, 0) must be
@@ -32,20 +33,23 @@
 //!   P_j = ∫ q δ²/2 dA / ∫ |P_out| h_out dA compares it with the outer plies' thickness.
 //!
 //! δ is the pattern-space distance of each node to the nearest tie through the stack (a
-//! quilting line of the panel, a node of a seam row, a node whose translations are fixed),
-//! averaged over the element's nodes: 0 where every node is tied. A panel is modelled with
+//! quilting line of the panel, a node of a seam row, a node whose translations are fixed):
+//! 0 where a node is tied. |P_out| at a node is the area mean of its elements' centre values
+//! (each ply's strain at two Gauss levels of its band from the element's positions and
+//! directors, E(z) of x + z d, its own law integrated over its thickness). A panel is modelled with
 //! discrete plies when S_j > [`SLIP_LIMIT`] or P_j > [`PEEL_LIMIT`] at any interface.
 
-use std::collections::HashMap;
+use std::sync::Arc;
 
-use nalgebra::{Matrix2, Matrix3x2, Vector2, Vector3};
+use nalgebra::{Matrix2, Matrix3x2, Vector3};
 use serde::Serialize;
 
 use super::export::GarmentLayout;
 use super::spec::GarmentSpec;
 use super::SeamInfo;
-use crate::material::{ShellMaterial, Voigt5};
-use crate::model::{Model, FIXED};
+use crate::element::{Section, ShellElement};
+use crate::material::{MaterialFailure, PointResponse, ShellMaterial, Tangent5, Voigt5};
+use crate::model::{Model, State, FIXED};
 
 /// Largest slip ratio (ply force changed by the unheld interlaminar shear between ties, over
 /// the outer plies' membrane force) of a panel kept laminated: the 5 % on seam forces.
@@ -79,6 +83,11 @@ pub struct PanelDemand {
     /// Largest slip and peel ratios over the interfaces.
     pub slip_ratio: f64,
     pub peel_ratio: f64,
+    /// Area mean over the free nodes of |Σ_k (f_ext,k − f_int,k)| / A over the whole stack (Pa):
+    /// the body's contact force (and the solver's residual), for reference.
+    pub stack_residual: f64,
+    /// Its normal component's area mean (Pa).
+    pub stack_residual_normal: f64,
     /// Whether the plies would slide or separate (S > SLIP_LIMIT or P > PEEL_LIMIT).
     pub discrete: bool,
     /// Per interface, innermost first.
@@ -90,30 +99,6 @@ pub struct PanelDemand {
 const DXI: [f64; 4] = [-0.25, 0.25, 0.25, -0.25];
 const DETA: [f64; 4] = [-0.25, -0.25, 0.25, 0.25];
 
-/// Unit normals at the nodes: the mean of the adjacent elements' centre normals g_ξ × g_η.
-fn node_normals(model: &Model, elements: &[usize], x: &dyn Fn(usize) -> Vector3<f64>) -> HashMap<usize, Vector3<f64>> {
-    let mut out: HashMap<usize, Vector3<f64>> = HashMap::new();
-    for &e in elements {
-        let nodes = model.elements[e].nodes;
-        let (mut gx, mut gy) = (Vector3::zeros(), Vector3::zeros());
-        for a in 0..4 {
-            gx += x(nodes[a]) * DXI[a];
-            gy += x(nodes[a]) * DETA[a];
-        }
-        let n = gx.cross(&gy);
-        for &a in &nodes {
-            *out.entry(a).or_insert_with(Vector3::zeros) += n;
-        }
-    }
-    for v in out.values_mut() {
-        let l = v.norm();
-        if l > 0.0 {
-            *v /= l;
-        }
-    }
-    out
-}
-
 /// Distance from `p` to the segment [a, b].
 fn segment_distance(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
     let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
@@ -122,57 +107,66 @@ fn segment_distance(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
     ((p[0] - a[0] - t * dx).powi(2) + (p[1] - a[1] - t * dy).powi(2)).sqrt()
 }
 
-/// Per element of one laminated part: what the divergence needs.
-struct ElementLoads {
-    /// Reference area (centre rule, 4 |G_ξ × G_η|).
-    area: f64,
-    /// First Piola–Kirchhoff membrane force of each ply (bottom first), as a map from the
-    /// reference lamina coordinates (e1, e2) to 3D force per reference length.
-    p: Vec<Matrix3x2<f64>>,
-    /// Reference lamina basis e1, e2.
-    e: [Vector3<f64>; 2],
-    /// Current director (unit) at the centre.
-    d: Vector3<f64>,
-    /// Outward reference conormal × length of each edge (a → a+1).
-    conormal: [Vector3<f64>; 4],
+/// One ply of a laminate alone: the laminate's thickness rule, the ply's own law inside its
+/// band [lo, hi] of the section coordinate ζ, no stress outside it. An element with this
+/// section gives ply k's share of the laminate element's internal force.
+#[derive(Debug)]
+struct OnePly {
+    rule: Vec<[f64; 2]>,
+    band: (f64, f64),
+    material: Arc<dyn ShellMaterial>,
 }
 
-impl ElementLoads {
-    /// Traction (force) on edge `k` of ply `ply`: P (e1·ν, e2·ν).
-    fn traction(&self, ply: usize, k: usize) -> Vector3<f64> {
-        let nu = self.conormal[k];
-        self.p[ply] * Vector2::new(self.e[0].dot(&nu), self.e[1].dot(&nu))
+impl OnePly {
+    /// The ply's own coordinate of ζ, if ζ lies in its band.
+    fn local(&self, zeta: f64) -> Option<f64> {
+        let (lo, hi) = self.band;
+        (zeta > lo && zeta <= hi).then(|| ((2.0 * zeta - lo - hi) / (hi - lo)).clamp(-1.0, 1.0))
+    }
+}
+
+impl ShellMaterial for OnePly {
+    fn response(&self, strain: &Voigt5) -> Result<PointResponse, MaterialFailure> {
+        self.response_at(strain, 0.0)
+    }
+    fn small_strain_moduli(&self) -> (f64, f64) {
+        self.material.small_strain_moduli()
+    }
+    fn response_at(&self, strain: &Voigt5, zeta: f64) -> Result<PointResponse, MaterialFailure> {
+        match self.local(zeta) {
+            Some(z) => self.material.response_at(strain, z),
+            None => Ok(PointResponse { stress: Voigt5::zeros(), tangent: Tangent5::zeros(), energy: 0.0 }),
+        }
+    }
+    fn stress_at(&self, strain: &Voigt5, zeta: f64) -> Result<(Voigt5, f64), MaterialFailure> {
+        match self.local(zeta) {
+            Some(z) => self.material.stress_at(strain, z),
+            None => Ok((Voigt5::zeros(), 0.0)),
+        }
+    }
+    fn thickness_rule(&self) -> Option<Vec<[f64; 2]>> {
+        Some(self.rule.clone())
     }
 }
 
 /// The membrane forces of the plies of element `e` of a laminated part at the deformed
-/// positions `x`, with reference and current nodal normals `n0`, `n1` as directors (the
-/// bonded plies' mid-planes sit at z̄_k along them, Kirchhoff–Love): each ply's Green–Lagrange
-/// strain at two Gauss levels of its band, its own law (`Laminate::plies`), integrated over
-/// its thickness.
-#[allow(clippy::too_many_arguments)]
-fn element_loads(
-    model: &Model,
-    e: usize,
-    x: &dyn Fn(usize) -> Vector3<f64>,
-    n0: &HashMap<usize, Vector3<f64>>,
-    n1: &HashMap<usize, Vector3<f64>>,
-    plies: &[(std::sync::Arc<dyn ShellMaterial>, f64)],
-) -> Result<ElementLoads, String> {
+/// positions `x` with current directors `d1` (reference directors `d0`): each ply's
+/// Green–Lagrange strain E(z) of x + z d at two Gauss levels of its band, its own law,
+/// integrated over its thickness; returned as first Piola–Kirchhoff forces P_k = F N_k (3×2,
+/// from the reference lamina axes to 3D force per reference length), bottom ply first, with
+/// the element's reference area.
+fn ply_forces(model: &Model, e: usize, x: &dyn Fn(usize) -> Vector3<f64>, d0: &dyn Fn(usize) -> Vector3<f64>, d1: &dyn Fn(usize) -> Vector3<f64>, plies: &[(Arc<dyn ShellMaterial>, f64)]) -> Result<(f64, Vec<Matrix3x2<f64>>), String> {
     let def = &model.elements[e];
     let nodes = def.nodes;
     let (mut gr, mut dr, mut gc, mut dc) = ([Vector3::zeros(); 2], [Vector3::zeros(); 2], [Vector3::zeros(); 2], [Vector3::zeros(); 2]);
-    let mut d_mean = Vector3::zeros();
     for a in 0..4 {
-        let (x0, x1) = (model.x0[nodes[a]], x(nodes[a]));
-        let (m0, m1) = (n0.get(&nodes[a]).copied().unwrap_or_default(), n1.get(&nodes[a]).copied().unwrap_or_default());
+        let (x0, x1, m0, m1) = (model.x0[nodes[a]], x(nodes[a]), d0(nodes[a]), d1(nodes[a]));
         for (al, dn) in [DXI, DETA].iter().enumerate() {
             gr[al] += x0 * dn[a];
             dr[al] += m0 * dn[a];
             gc[al] += x1 * dn[a];
             dc[al] += m1 * dn[a];
         }
-        d_mean += m1;
     }
     let normal = gr[0].cross(&gr[1]);
     let area = 4.0 * normal.norm();
@@ -210,46 +204,75 @@ fn element_loads(
         p.push(f * n);
         below += h;
     }
-    let mut conormal = [Vector3::zeros(); 4];
-    for (k, c) in conormal.iter_mut().enumerate() {
-        *c = (model.x0[nodes[(k + 1) % 4]] - model.x0[nodes[k]]).cross(&e3);
-    }
-    let d = if d_mean.norm() > 0.0 { d_mean.normalize() } else { gc[0].cross(&gc[1]).normalize() };
-    Ok(ElementLoads { area, p, e: [e1, e2], d, conormal })
+    Ok((area, p))
 }
 
-/// Slip and peel demand of every laminated multi-ply part of the garment at the deformed
-/// node positions `positions` (see the module documentation). `g` is the gravitational
-/// acceleration of the scene's weight loads, `friction` the inter-ply Coulomb coefficient.
-pub fn evaluate(spec: &GarmentSpec, model: &Model, positions: &[[f64; 3]], layout: &GarmentLayout, seams: &[SeamInfo], g: Vector3<f64>, friction: f64) -> Result<Vec<PanelDemand>, String> {
-    let x = |n: usize| positions.get(n).map_or(model.x0[n], |p| Vector3::new(p[0], p[1], p[2]));
-    let x0 = |n: usize| model.x0[n];
+/// Slip and peel demand of every laminated multi-ply part of the garment at the converged
+/// state `state` (see the module documentation). `g` is the gravitational acceleration of
+/// the scene's weight loads, `friction` the inter-ply Coulomb coefficient.
+pub fn evaluate(spec: &GarmentSpec, model: &Model, state: &State, layout: &GarmentLayout, seams: &[SeamInfo], g: Vector3<f64>, friction: f64) -> Result<Vec<PanelDemand>, String> {
+    let x = |n: usize| model.position(state, n);
+    let d0 = |n: usize| model.frames0[n].d;
+    let d1 = |n: usize| state.frames[n].d;
     let mut out = Vec::new();
     for (part, plies) in layout.part_plies.iter().enumerate() {
         let Some(panel_id) = layout.part_tags.get(part).map(|t| t[0]).filter(|&p| p >= 0 && plies.len() > 1) else { continue };
         let panel_name = layout.panels.get(panel_id as usize).cloned().unwrap_or_default();
+        let located = |m: String| format!("panel \"{panel_name}\": {m}");
         let info = &model.parts[part];
         let elements: Vec<usize> = (info.first_element..info.first_element + info.n_elements).collect();
         let Some(&first) = elements.first() else { continue };
         let section = &model.sections[model.elements[first].section];
-        let laminate = section.material.as_laminate().ok_or_else(|| format!("panel \"{panel_name}\": its section is not a laminate"))?;
-        let stack: Vec<(std::sync::Arc<dyn ShellMaterial>, f64)> = laminate.plies().iter().map(|p| (p.material.clone(), p.thickness)).collect();
+        let laminate = section.material.as_laminate().ok_or_else(|| located("its section is not a laminate".into()))?;
+        let stack: Vec<(Arc<dyn ShellMaterial>, f64)> = laminate.plies().iter().map(|p| (p.material.clone(), p.thickness)).collect();
         let density: Vec<f64> = laminate.plies().iter().map(|p| p.areal_density.or_else(|| p.material.areal_density()).unwrap_or(0.0)).collect();
         let names: Vec<String> = laminate.plies().iter().map(|p| p.name.clone()).collect();
-        let n0 = node_normals(model, &elements, &x0);
-        let n1 = node_normals(model, &elements, &x);
-        let loads = elements.iter().map(|&e| element_loads(model, e, &x, &n0, &n1, &stack)).collect::<Result<Vec<_>, _>>().map_err(|m| format!("panel \"{panel_name}\": {m}"))?;
-        // Tie distance δ of each node (pattern space).
-        let mut tied: Vec<[f64; 2]> = Vec::new();
-        for n in info.first_node..info.first_node + info.n_nodes {
-            let fixed = (0..3).all(|k| model.dofs.eq.get(5 * n + k) == Some(&FIXED));
-            let on_seam = seams.iter().any(|s| s.master.contains(&n) || s.slave.contains(&n));
-            if let (true, Some(uv)) = (fixed || on_seam, layout.pattern_uv.get(n).copied().flatten()) {
-                tied.push(uv);
+        let rule = laminate.thickness_rule().unwrap_or_default();
+        let total = laminate.thickness();
+        let mut below = 0.0;
+        let ply_sections: Vec<Section> = stack
+            .iter()
+            .map(|(material, h)| {
+                let band = (2.0 * below / total - 1.0, 2.0 * (below + h) / total - 1.0);
+                below += h;
+                Section { material: Arc::new(OnePly { rule: rule.clone(), band, material: material.clone() }), ..section.clone() }
+            })
+            .collect();
+        let n_plies = stack.len();
+        let first_node = info.first_node;
+        let n_nodes = info.n_nodes;
+        // Per node: tributary area, each ply's internal force, the outer plies' |P_out| (area
+        // weighted, per interface).
+        let mut area = vec![0.0; n_nodes];
+        let mut f_int = vec![vec![Vector3::zeros(); n_plies]; n_nodes];
+        let mut p_out = vec![vec![0.0; n_plies]; n_nodes];
+        for &e in &elements {
+            let def = &model.elements[e];
+            let u = def.nodes.map(|n| state.u[n]);
+            let frames = def.nodes.map(|n| state.frames[n]);
+            let (a_e, p) = ply_forces(model, e, &x, &d0, &d1, &stack).map_err(located)?;
+            for (k, sec) in ply_sections.iter().enumerate() {
+                let el = ShellElement { x0: def.nodes.map(|n| model.x0[n]), d0: def.nodes.map(|n| model.frames0[n].d), grain: def.grain, section: sec };
+                let r = el.response(&u, &frames, false).map_err(|m| located(format!("element {e}: {m}")))?;
+                for (a, &n) in def.nodes.iter().enumerate() {
+                    f_int[n - first_node][k] += Vector3::new(r.force[5 * a], r.force[5 * a + 1], r.force[5 * a + 2]);
+                }
+            }
+            for &n in &def.nodes {
+                area[n - first_node] += 0.25 * a_e;
+                for j in 1..n_plies {
+                    let s: Matrix3x2<f64> = p[j..].iter().sum();
+                    p_out[n - first_node][j] += 0.25 * a_e * s.norm();
+                }
             }
         }
+        // Tied nodes (seam rows, fixed) carry reactions through every ply: left out.
+        let tied_node = |n: usize| (0..3).all(|k| model.dofs.eq.get(5 * n + k) == Some(&FIXED)) || seams.iter().any(|s| s.master.contains(&n) || s.slave.contains(&n));
+        let tied: Vec<bool> = (first_node..first_node + n_nodes).map(tied_node).collect();
+        // Tie distance δ of each node (pattern space).
+        let ties_uv: Vec<[f64; 2]> = (first_node..first_node + n_nodes).filter(|&n| tied[n - first_node]).filter_map(|n| layout.pattern_uv.get(n).copied().flatten()).collect();
         let lines: Vec<&Vec<[f64; 2]>> = spec.stitch_lines.iter().filter(|l| l.panel == panel_name).map(|l| &l.points).collect();
-        let uvs: Vec<[f64; 2]> = (info.first_node..info.first_node + info.n_nodes).filter_map(|n| layout.pattern_uv.get(n).copied().flatten()).collect();
+        let uvs: Vec<[f64; 2]> = (first_node..first_node + n_nodes).filter_map(|n| layout.pattern_uv.get(n).copied().flatten()).collect();
         // Without any tie the plies are held by friction alone: δ is the panel's extent (the
         // diagonal of its pattern's bounding box).
         let (lo, hi) = uvs.iter().fold(([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]), |(lo, hi), p| ([lo[0].min(p[0]), lo[1].min(p[1])], [hi[0].max(p[0]), hi[1].max(p[1])]));
@@ -257,7 +280,7 @@ pub fn evaluate(spec: &GarmentSpec, model: &Model, positions: &[[f64; 3]], layou
         let delta = |n: usize| -> f64 {
             let Some(p) = layout.pattern_uv.get(n).copied().flatten() else { return 0.0 };
             let mut d = extent;
-            for t in &tied {
+            for t in &ties_uv {
                 d = d.min(((p[0] - t[0]).powi(2) + (p[1] - t[1]).powi(2)).sqrt());
             }
             for l in &lines {
@@ -270,57 +293,35 @@ pub fn evaluate(spec: &GarmentSpec, model: &Model, positions: &[[f64; 3]], layou
             }
             d
         };
-        let node_delta: HashMap<usize, f64> = (info.first_node..info.first_node + info.n_nodes).map(|n| (n, delta(n))).collect();
-        // Edge neighbours: sorted node pair → (element, edge).
-        let mut edges: HashMap<(usize, usize), Vec<(usize, usize)>> = HashMap::new();
-        for (i, &e) in elements.iter().enumerate() {
-            let nodes = model.elements[e].nodes;
-            for k in 0..4 {
-                let (a, b) = (nodes[k], nodes[(k + 1) % 4]);
-                edges.entry((a.min(b), a.max(b))).or_default().push((i, k));
-            }
-        }
-        let neighbour = |i: usize, k: usize| -> Option<(usize, usize)> {
-            let nodes = model.elements[elements[i]].nodes;
-            let (a, b) = (nodes[k], nodes[(k + 1) % 4]);
-            edges.get(&(a.min(b), a.max(b)))?.iter().copied().find(|&(j, _)| j != i)
-        };
-        let n_plies = stack.len();
+        // Force on the plies from ply j outwards, less the interface, per tributary area.
+        let outer_force = |i: usize, j: usize| -> Vector3<f64> { (j..n_plies).map(|k| g * (density[k] * area[i]) - f_int[i][k]).sum::<Vector3<f64>>() / area[i].max(1e-300) };
+        let free: Vec<usize> = (0..n_nodes).filter(|&i| !tied[i] && area[i] > 0.0).collect();
+        let free_area: f64 = free.iter().map(|&i| area[i]).sum();
+        let mean = |v: &dyn Fn(usize) -> f64| free.iter().map(|&i| area[i] * v(i)).sum::<f64>() / free_area.max(1e-300);
+        let stack_residual = mean(&|i| outer_force(i, 0).norm());
+        let stack_residual_normal = mean(&|i| outer_force(i, 0).dot(&d1(first_node + i)).abs());
         let mut interfaces = Vec::new();
         for j in 1..n_plies {
             let h_out: f64 = stack[j..].iter().map(|p| p.1).sum();
-            let (mut slip_num, mut peel_num, mut force_den, mut slipping, mut area_sum, mut tau_sum, mut p_sum) = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
-            for (i, l) in loads.iter().enumerate() {
-                let mut f = Vector3::zeros();
-                for k in j..n_plies {
-                    for edge in 0..4 {
-                        f += match neighbour(i, edge) {
-                            Some((m, me)) => 0.5 * (l.traction(k, edge) - loads[m].traction(k, me)),
-                            None => l.traction(k, edge),
-                        };
-                    }
-                }
-                f /= l.area;
-                for &rho in &density[j..] {
-                    f += g * rho;
-                }
-                let fn_ = f.dot(&l.d);
-                let tau = (f - l.d * fn_).norm();
+            let (mut slip_num, mut peel_num, mut force_den, mut slipping, mut tau_sum, mut p_sum) = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+            for &i in &free {
+                let n = first_node + i;
+                let d = d1(n);
+                let f = outer_force(i, j);
+                let fn_ = f.dot(&d);
+                let tau = (f - d * fn_).norm();
                 let p = (-fn_).max(0.0);
                 let q = fn_.max(0.0);
                 let excess = (tau - friction * p).max(0.0);
-                let dl = model.elements[elements[i]].nodes.iter().map(|n| node_delta.get(n).copied().unwrap_or(0.0)).sum::<f64>() / 4.0;
-                let p_out: Matrix3x2<f64> = l.p[j..].iter().sum();
-                let n_out = p_out.norm();
-                slip_num += l.area * excess * dl;
-                peel_num += l.area * q * dl * dl / 2.0;
-                force_den += l.area * n_out;
+                let dl = delta(n);
+                slip_num += area[i] * excess * dl;
+                peel_num += area[i] * q * dl * dl / 2.0;
+                force_den += p_out[i][j];
                 if tau > friction * p {
-                    slipping += l.area;
+                    slipping += area[i];
                 }
-                area_sum += l.area;
-                tau_sum += l.area * tau;
-                p_sum += l.area * p;
+                tau_sum += area[i] * tau;
+                p_sum += area[i] * p;
             }
             let ratio = |num: f64, den: f64| if num <= 1e-300 { 0.0 } else if den > 0.0 { num / den } else { f64::INFINITY };
             interfaces.push(InterfaceDemand {
@@ -328,14 +329,14 @@ pub fn evaluate(spec: &GarmentSpec, model: &Model, positions: &[[f64; 3]], layou
                 outer: names[j].clone(),
                 slip_ratio: ratio(slip_num, force_den),
                 peel_ratio: ratio(peel_num, force_den * h_out),
-                slipping_area_fraction: slipping / area_sum.max(1e-300),
-                mean_shear: tau_sum / area_sum.max(1e-300),
-                mean_pressure: p_sum / area_sum.max(1e-300),
+                slipping_area_fraction: slipping / free_area.max(1e-300),
+                mean_shear: tau_sum / free_area.max(1e-300),
+                mean_pressure: p_sum / free_area.max(1e-300),
             });
         }
         let slip_ratio = interfaces.iter().map(|i| i.slip_ratio).fold(0.0, f64::max);
         let peel_ratio = interfaces.iter().map(|i| i.peel_ratio).fold(0.0, f64::max);
-        out.push(PanelDemand { panel: panel_name, slip_ratio, peel_ratio, discrete: slip_ratio > SLIP_LIMIT || peel_ratio > PEEL_LIMIT, interfaces });
+        out.push(PanelDemand { panel: panel_name, slip_ratio, peel_ratio, stack_residual, stack_residual_normal, discrete: slip_ratio > SLIP_LIMIT || peel_ratio > PEEL_LIMIT, interfaces });
     }
     Ok(out)
 }
