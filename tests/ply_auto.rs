@@ -125,3 +125,29 @@ fn unquilted_plies_that_would_slide_are_discrete() {
     assert!(diff <= 1e-12 * L, "Auto = Discrete: {diff}");
     assert!((-tip(&auto) / w_unbonded - 1.0).abs() < 0.05, "tip {} vs unbonded {w_unbonded}", -tip(&auto));
 }
+
+/// `plyshell solve` on an Auto scene prints the choice per panel and writes it into
+/// summary.json (`ply_model_auto`: model, reason, slip and peel ratios per interface, the
+/// first pass's cost), the first (laminated) pass's files in `auto_first_pass/`.
+#[test]
+fn solve_reports_the_auto_choice() {
+    let dir = std::env::temp_dir().join(format!("plyshell_ply_auto_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let file = dir.join("cantilever.ron");
+    std::fs::write(&file, cantilever(&[], "Auto")).expect("scene");
+    let out = dir.join("out");
+    let run = std::process::Command::new(env!("CARGO_BIN_EXE_plyshell")).args(["solve", "--quiet", "--out"]).arg(&out).arg(&file).output().expect("plyshell runs");
+    let stdout = String::from_utf8_lossy(&run.stdout);
+    println!("{stdout}{}", String::from_utf8_lossy(&run.stderr));
+    assert!(run.status.success());
+    assert!(stdout.contains("ply_model Auto: panel \"strip\" → discrete (slip"), "{stdout}");
+    let summary: serde_json::Value = serde_json::from_slice(&std::fs::read(out.join("summary.json")).expect("summary.json")).expect("JSON");
+    let auto = &summary["ply_model_auto"];
+    assert_eq!(auto["passes"], 2);
+    assert_eq!(auto["panels"][0]["model"], "discrete");
+    assert_eq!(auto["panels"][0]["interfaces"].as_array().map(|a| a.len()), Some(2));
+    assert!(auto["panels"][0]["slip_ratio"].as_f64().is_some_and(|s| s > plyshell::garment::ply_auto::SLIP_LIMIT));
+    assert_eq!(auto["first_pass"]["status"], "completed");
+    assert!(out.join("auto_first_pass").join("summary.json").exists());
+    let _ = std::fs::remove_dir_all(&dir);
+}
