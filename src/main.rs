@@ -164,6 +164,10 @@ enum Command {
         /// Only the discrete ply model (no laminate or Auto runs).
         #[arg(long)]
         discrete_only: bool,
+        /// Ply models to run (comma-separated from laminate, auto, discrete; default all
+        /// three); the discrete reference is always run.
+        #[arg(long, value_delimiter = ',')]
+        ply_models: Vec<String>,
         /// Also write every run's VTU/PVD and summary.json into OUT/<run>/.
         #[arg(long)]
         vtu: bool,
@@ -219,15 +223,24 @@ fn main() -> ExitCode {
         Command::Import { pattern, out, size, units } => import(&pattern, &out, size.as_deref(), units),
         Command::Compare { scenes, out, quiet } => compare(&scenes, &out, quiet),
         Command::Bench { json, quick, drive } => if drive { bench::drive::run_drive(&json, quick) } else { bench::run_all(&json, quick) }.map_err(|e| e.to_string()),
-        Command::Study { scene, out, sizes, tolerances, discrete_only, vtu } => {
+        Command::Study { scene, out, sizes, tolerances, discrete_only, ply_models, vtu } => (|| {
             use plyshell::garment::PlyModel;
-            let ply_models = if discrete_only { vec![PlyModel::Discrete] } else { vec![PlyModel::Laminate, PlyModel::Auto, PlyModel::Discrete] };
+            let named = ply_models
+                .iter()
+                .map(|m| match m.to_ascii_lowercase().as_str() {
+                    "laminate" => Ok(PlyModel::Laminate),
+                    "auto" => Ok(PlyModel::Auto),
+                    "discrete" => Ok(PlyModel::Discrete),
+                    other => Err(format!("--ply-models: unknown ply model \"{other}\" (expected laminate, auto or discrete)")),
+                })
+                .collect::<Result<Vec<_>, _>>()?;
+            let ply_models = if discrete_only { vec![PlyModel::Discrete] } else if named.is_empty() { vec![PlyModel::Laminate, PlyModel::Auto, PlyModel::Discrete] } else { named };
             let options = plyshell::study::StudyOptions { sizes, tolerances, ply_models, out: out.clone(), vtu };
             plyshell::study::run_study(&scene, &options, &mut |m| warn!("{m}")).map(|rows| {
                 say!("{}", plyshell::study::markdown(&scene.display().to_string(), &rows));
                 say!("wrote {}", ["study.md", "study.json", "study.svg"].map(|f| out.join(f).display().to_string()).join(", "));
             })
-        }
+        })(),
         Command::Body { measurements, pose, motion, resolution, out } => body(measurements.as_deref(), pose.as_deref(), motion.as_deref(), resolution, &out),
         Command::Fuzz { corpus, seed, count, solve_every, jobs, work, check_timeout, solve_timeout } => {
             fuzz(corpus, seed, count, solve_every, jobs, work, check_timeout, solve_timeout)
