@@ -151,3 +151,30 @@ fn solve_reports_the_auto_choice() {
     assert!(out.join("auto_first_pass").join("summary.json").exists());
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Peel: the same unquilted cantilever turned over (placed rotated 180° about its length, so
+/// the director and the outer plies point down): the outermost ply's weight now pulls it off
+/// the others (q = ρ g = 2.9 Pa, no pressure at that interface), nothing but the root clamp
+/// holds it (δ up to L), so its peel ratio q δ²/(2 |N_out| h_out) is over the limit of 1
+/// (1.31; the estimate takes the tension that holds the ply up from the bonded laminate's
+/// bending, so it understates the peel of plies that also slide) — while upright the same
+/// weight presses the interfaces (peel ratio 0).
+#[test]
+fn plies_hanging_under_the_stack_would_peel() {
+    let upright = cantilever(&[], "Auto");
+    let flipped = upright.replace(r#"ply_model: Some(Auto))]"#, r#"ply_model: Some(Auto), placement: Rigid(rotation_deg: (180.0, 0.0, 0.0)))]"#);
+    assert_ne!(upright, flipped);
+    let up = solve(&upright);
+    let down = solve(&flipped);
+    for (name, r) in [("upright", &up), ("turned over", &down)] {
+        for i in &r.demands[0].interfaces {
+            println!("{name}: {} | {}: slip {:.3}, peel {:.3}, mean p {:.2} Pa", i.inner, i.outer, i.slip_ratio, i.peel_ratio, i.mean_pressure);
+        }
+    }
+    assert!(up.demands[0].peel_ratio < 1e-9, "upright: the weight presses the plies together ({})", up.demands[0].peel_ratio);
+    let outermost = &down.demands[0].interfaces[1];
+    assert_eq!(outermost.outer, "top");
+    assert!(outermost.peel_ratio > plyshell::garment::ply_auto::PEEL_LIMIT, "turned over: {}", outermost.peel_ratio);
+    assert!(outermost.mean_pressure < 1e-9 * RHO * G, "no pressure where the outermost ply hangs: {}", outermost.mean_pressure);
+    assert_eq!(down.choices[0].model, "discrete");
+}
