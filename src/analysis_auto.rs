@@ -9,7 +9,8 @@
 //!    carried by the quilting) or separate (peel against the quilting). The flagged panels
 //!    (and the panels sewn to them) are rebuilt with discrete plies, the rest stay
 //!    laminated, and the scene is solved again from its start (the laminate's state is not
-//!    mapped onto the plies). If nothing is flagged the first pass is the result.
+//!    mapped onto the plies). If nothing is flagged the first pass is the result; if the
+//!    first pass fails (e.g. the laminate never comes to rest), its Auto panels go discrete.
 //!
 //! The summary's `ply_model_auto` section records per panel the chosen model, its reason,
 //! the slip and peel ratios per interface, and the first pass's cost; with an output
@@ -80,7 +81,15 @@ pub fn run(scene: &Scene, file: &str, text: &str, options: &RunOptions, progress
     let first = build(&first_scene)?;
     let first_dir: Option<PathBuf> = options.out_dir.as_ref().map(|d| d.join("auto_first_pass"));
     let laminated = first_choices.iter().any(|c| c.model == "laminate");
-    let first_summary = analysis::run(&first_scene, &first, &RunOptions { out_dir: if laminated { first_dir.clone() } else { options.out_dir.clone() } }, progress)?;
+    let first_options = RunOptions { out_dir: if laminated { first_dir.clone() } else { options.out_dir.clone() } };
+    // A laminated first pass that does not solve (e.g. never comes to rest) is no model of
+    // the garment: its Auto panels go discrete (the criterion is still evaluated at its last
+    // converged state, for the record). Without a laminated panel the first pass is final.
+    let (first_summary, first_failure) = match analysis::run(&first_scene, &first, &first_options, progress) {
+        Ok(s) => (s, None),
+        Err(RunError::Solve { error, summary }) if laminated => (*summary, Some(error.to_string())),
+        Err(e) => return Err(e),
+    };
     let friction = if spec.interply.enabled { spec.interply.friction } else { 0.0 };
     let demands = match &first.garment {
         Some(layout) if laminated => {
@@ -89,8 +98,16 @@ pub fn run(scene: &Scene, file: &str, text: &str, options: &RunOptions, progress
         }
         _ => Vec::new(),
     };
-    let slides: Vec<String> = demands.iter().filter(|d| d.discrete).map(|d| d.panel.clone()).collect();
-    let (second_spec, choices) = resolve_auto(spec, &slides);
+    let slides: Vec<String> = match &first_failure {
+        Some(_) => first_choices.iter().filter(|c| c.model == "laminate").map(|c| c.panel.clone()).collect(),
+        None => demands.iter().filter(|d| d.discrete).map(|d| d.panel.clone()).collect(),
+    };
+    let (second_spec, mut choices) = resolve_auto(spec, &slides);
+    if let Some(f) = &first_failure {
+        for c in choices.iter_mut().filter(|c| slides.contains(&c.panel)) {
+            c.reason = format!("the laminated first pass failed ({f})");
+        }
+    }
     let changed = second_spec.panels.iter().zip(&first_spec.panels).any(|(a, b)| a.ply_model != b.ply_model);
     let section = |passes: usize, first: &Summary| {
         let panels: Vec<serde_json::Value> = choices
@@ -106,7 +123,7 @@ pub fn run(scene: &Scene, file: &str, text: &str, options: &RunOptions, progress
             "peel_limit": ply_auto::PEEL_LIMIT,
             "friction": friction,
             "panels": panels,
-            "first_pass": { "status": first.status, "newton_iterations": first.newton_iterations, "wall_s": first.wall_s, "dofs": first.sizes.dofs },
+            "first_pass": { "status": first.status, "failure": first_failure, "newton_iterations": first.newton_iterations, "wall_s": first.wall_s, "dofs": first.sizes.dofs },
         })
     };
     let write = |summary: &Summary| -> Result<(), RunError> {

@@ -178,3 +178,22 @@ fn plies_hanging_under_the_stack_would_peel() {
     assert!(outermost.mean_pressure < 1e-9 * RHO * G, "no pressure where the outermost ply hangs: {}", outermost.mean_pressure);
     assert_eq!(down.choices[0].model, "discrete");
 }
+
+/// A laminated first pass that does not solve is no model of the garment: its Auto panels go
+/// discrete (fidelity is only raised). Here a Dynamic step allowed a single time step, so the
+/// quilted cantilever (laminated if its first pass came to rest) cannot reach rest in either
+/// pass: the run fails, and its summary records the discrete choice and why.
+#[test]
+fn a_failed_laminate_pass_goes_discrete() {
+    let every_column: Vec<f64> = (1..=20).map(|i| i as f64 * H).collect();
+    let text = cantilever(&every_column, "Auto").replace(r#"scale: {"g1": 1.0, "g2": 1.0, "g3": 1.0})"#, r#"scale: {"g1": 1.0, "g2": 1.0, "g3": 1.0}, kind: Dynamic((dt: 1.0e-3, max_steps: 1)))"#);
+    assert!(text.contains("max_steps: 1"));
+    let sc = scene::parse("ply_auto.ron", &text).unwrap_or_else(|e| panic!("{e}"));
+    let Err(plyshell::analysis::RunError::Solve { error, summary }) = analysis_auto::run(&sc, "ply_auto.ron", &text, &RunOptions::default(), &mut |_| {}) else { panic!("expected the solve to fail") };
+    println!("{error}");
+    let auto = &summary.extra["ply_model_auto"];
+    println!("{auto:#}");
+    assert_eq!(auto["panels"][0]["model"], "discrete");
+    assert!(auto["panels"][0]["reason"].as_str().is_some_and(|r| r.contains("first pass failed")), "{auto}");
+    assert!(auto["first_pass"]["failure"].as_str().is_some_and(|f| f.contains("max_steps")), "{auto}");
+}
