@@ -115,6 +115,8 @@ struct OnePly {
     rule: Vec<[f64; 2]>,
     band: (f64, f64),
     material: Arc<dyn ShellMaterial>,
+    /// Stress factor of the element's section (a taped seam's band).
+    factor: f64,
 }
 
 impl OnePly {
@@ -134,13 +136,18 @@ impl ShellMaterial for OnePly {
     }
     fn response_at(&self, strain: &Voigt5, zeta: f64) -> Result<PointResponse, MaterialFailure> {
         match self.local(zeta) {
-            Some(z) => self.material.response_at(strain, z),
+            Some(z) => self.material.response_at(strain, z).map(|mut r| {
+                r.stress *= self.factor;
+                r.tangent *= self.factor;
+                r.energy *= self.factor;
+                r
+            }),
             None => Ok(PointResponse { stress: Voigt5::zeros(), tangent: Tangent5::zeros(), energy: 0.0 }),
         }
     }
     fn stress_at(&self, strain: &Voigt5, zeta: f64) -> Result<(Voigt5, f64), MaterialFailure> {
         match self.local(zeta) {
-            Some(z) => self.material.stress_at(strain, z),
+            Some(z) => self.material.stress_at(strain, z).map(|(s, w)| (s * self.factor, w * self.factor)),
             None => Ok((Voigt5::zeros(), 0.0)),
         }
     }
@@ -221,23 +228,34 @@ pub fn evaluate(spec: &GarmentSpec, model: &Model, state: &State, layout: &Garme
         let located = |m: String| format!("panel \"{panel_name}\": {m}");
         let info = &model.parts[part];
         let elements: Vec<usize> = (info.first_element..info.first_element + info.n_elements).collect();
-        let Some(&first) = elements.first() else { continue };
-        let section = &model.sections[model.elements[first].section];
-        let laminate = section.material.as_laminate().ok_or_else(|| located("its section is not a laminate".into()))?;
+        // The panel's laminate (any element's; a taped band scales it) and, per section, the
+        // one-ply sections of its plies and the section's stress factor.
+        let laminate = elements.iter().find_map(|&e| model.sections[model.elements[e].section].material.as_laminate().map(|l| l.0)).ok_or_else(|| located("its section is not a laminate".into()))?;
         let stack: Vec<(Arc<dyn ShellMaterial>, f64)> = laminate.plies().iter().map(|p| (p.material.clone(), p.thickness)).collect();
         let density: Vec<f64> = laminate.plies().iter().map(|p| p.areal_density.or_else(|| p.material.areal_density()).unwrap_or(0.0)).collect();
         let names: Vec<String> = laminate.plies().iter().map(|p| p.name.clone()).collect();
-        let rule = laminate.thickness_rule().unwrap_or_default();
-        let total = laminate.thickness();
-        let mut below = 0.0;
-        let ply_sections: Vec<Section> = stack
-            .iter()
-            .map(|(material, h)| {
-                let band = (2.0 * below / total - 1.0, 2.0 * (below + h) / total - 1.0);
-                below += h;
-                Section { material: Arc::new(OnePly { rule: rule.clone(), band, material: material.clone() }), ..section.clone() }
-            })
-            .collect();
+        let mut per_section: std::collections::HashMap<usize, (Vec<Section>, f64)> = std::collections::HashMap::new();
+        for &e in &elements {
+            let si = model.elements[e].section;
+            if per_section.contains_key(&si) {
+                continue;
+            }
+            let section = &model.sections[si];
+            let (lam, factor) = section.material.as_laminate().ok_or_else(|| located(format!("element {e}: its section is not a laminate")))?;
+            let rule = lam.thickness_rule().unwrap_or_default();
+            let total = lam.thickness();
+            let mut below = 0.0;
+            let plies: Vec<Section> = lam
+                .plies()
+                .iter()
+                .map(|p| {
+                    let band = (2.0 * below / total - 1.0, 2.0 * (below + p.thickness) / total - 1.0);
+                    below += p.thickness;
+                    Section { material: Arc::new(OnePly { rule: rule.clone(), band, material: p.material.clone(), factor }), ..section.clone() }
+                })
+                .collect();
+            per_section.insert(si, (plies, factor));
+        }
         let n_plies = stack.len();
         let first_node = info.first_node;
         let n_nodes = info.n_nodes;
@@ -250,7 +268,9 @@ pub fn evaluate(spec: &GarmentSpec, model: &Model, state: &State, layout: &Garme
             let def = &model.elements[e];
             let u = def.nodes.map(|n| state.u[n]);
             let frames = def.nodes.map(|n| state.frames[n]);
-            let (a_e, p) = ply_forces(model, e, &x, &d0, &d1, &stack).map_err(located)?;
+            let Some((ply_sections, factor)) = per_section.get(&def.section) else { continue };
+            let (a_e, mut p) = ply_forces(model, e, &x, &d0, &d1, &stack).map_err(located)?;
+            p.iter_mut().for_each(|pk| *pk *= *factor);
             for (k, sec) in ply_sections.iter().enumerate() {
                 let el = ShellElement { x0: def.nodes.map(|n| model.x0[n]), d0: def.nodes.map(|n| model.frames0[n].d), grain: def.grain, section: sec };
                 let r = el.response(&u, &frames, false).map_err(|m| located(format!("element {e}: {m}")))?;

@@ -178,8 +178,8 @@ impl ShellMaterial for Laminate {
         Some(self.total)
     }
 
-    fn as_laminate(&self) -> Option<&Laminate> {
-        Some(self)
+    fn as_laminate(&self) -> Option<(&Laminate, f64)> {
+        Some((self, 1.0))
     }
 
     /// Σ of the plies' areal densities when every ply has one.

@@ -101,9 +101,10 @@ pub trait ShellMaterial: Send + Sync + std::fmt::Debug {
     fn areal_density(&self) -> Option<f64> {
         None
     }
-    /// The laminate, if this section law stacks plies (for per-ply post-processing such as
-    /// the `ply_model: Auto` criterion).
-    fn as_laminate(&self) -> Option<&Laminate> {
+    /// The laminate, if this section law stacks plies, and the factor its stresses are
+    /// scaled by (1, or a taped seam's stiffness factor): for per-ply post-processing such as
+    /// the `ply_model: Auto` criterion.
+    fn as_laminate(&self) -> Option<(&Laminate, f64)> {
         None
     }
 }
