@@ -94,7 +94,12 @@ pub fn run(scene: &Scene, file: &str, text: &str, options: &RunOptions, progress
     let demands = match &first.garment {
         Some(layout) if laminated => {
             let state = first_summary.final_state.as_ref().ok_or_else(|| RunError::Setup("ply_model Auto: the first pass left no state".into()))?;
-            ply_auto::evaluate(&first_spec, &first.model, state, layout, &first.seams, gravity(scene), friction).map_err(|m| RunError::Setup(format!("ply_model Auto: {m}")))?
+            match ply_auto::evaluate(&first_spec, &first.model, state, layout, &first.seams, gravity(scene), friction) {
+                Ok(d) => d,
+                // After a failed first pass the criterion is only for the record.
+                Err(_) if first_failure.is_some() => Vec::new(),
+                Err(m) => return Err(RunError::Setup(format!("ply_model Auto: {m}"))),
+            }
         }
         _ => Vec::new(),
     };
