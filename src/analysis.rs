@@ -43,6 +43,9 @@ pub struct RunOptions {
 /// Solves `built` (from `scene`), reporting progress, and writes VTU/PVD, summary.json and
 /// the monitor plot into the output directory.
 pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &mut dyn FnMut(&Progress)) -> Result<Summary, RunError> {
+    if crate::analysis_auto::is_auto(scene) {
+        return Err(RunError::Setup("the garment has ply_model Auto, which is solved in two passes (laminate, then discrete plies where they would slide): run it with analysis_auto::run (as plyshell solve and study do)".into()));
+    }
     let t0 = Instant::now();
     let seeded = match &built.imperfection {
         Some(imp) => Some(crate::solver::imperfection::seeded(&built.model, imp, &scene.solver).map_err(RunError::Setup)?),
@@ -319,6 +322,7 @@ pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &m
     }
     summary.export_s = export_s;
     summary.final_positions = (0..model.n_nodes()).map(|n| model.position(&state, n).into()).collect();
+    summary.final_state = Some(state.clone());
     summary.wall_s = t0.elapsed().as_secs_f64();
     summary.peak_memory_mib = peak_memory_mib();
     if !problems.is_empty() {

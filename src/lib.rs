@@ -27,6 +27,7 @@ pub mod model;
 pub mod solver;
 pub mod scene;
 pub mod analysis;
+pub mod analysis_auto;
 pub mod compare;
 pub mod check;
 pub mod io;

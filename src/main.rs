@@ -146,7 +146,7 @@ enum Command {
         #[arg(long, default_value = "out/body")]
         out: PathBuf,
     },
-    /// Solve a garment scene at increasing fidelity (mesh levels × laminate / discrete plies)
+    /// Solve a garment scene at increasing fidelity (mesh levels × laminate / Auto / discrete plies)
     /// and report each run's time and error against the finest discrete model: table, JSON
     /// and error-vs-time plot.
     Study {
@@ -161,9 +161,13 @@ enum Command {
         /// Extra runs with `element_size: Auto((tolerance: T))` (comma-separated tolerances).
         #[arg(long, value_delimiter = ',')]
         tolerances: Vec<f64>,
-        /// Only the discrete ply model (no laminate runs).
+        /// Only the discrete ply model (no laminate or Auto runs).
         #[arg(long)]
         discrete_only: bool,
+        /// Ply models to run (comma-separated from laminate, auto, discrete; default all
+        /// three); the discrete reference is always run.
+        #[arg(long, value_delimiter = ',')]
+        ply_models: Vec<String>,
         /// Also write every run's VTU/PVD and summary.json into OUT/<run>/.
         #[arg(long)]
         vtu: bool,
@@ -202,30 +206,41 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     plyshell::budget::set_limit(cli.max_memory);
     let result = match cli.command {
-        Command::Solve { scene, out, quiet } => scene::load(&scene)
-            .map_err(|e| e.to_string())
-            .and_then(|(s, b)| solve(&s, &b, &out, quiet)),
+        Command::Solve { scene, out, quiet } => scene::load(&scene).map_err(|e| e.to_string()).and_then(|(s, b)| {
+            // `ply_model: Auto` rebuilds the scene for its second pass: it needs the text.
+            let text = if plyshell::analysis_auto::is_auto(&s) { std::fs::read_to_string(&scene).map_err(|e| format!("{}: {e}", scene.display()))? } else { String::new() };
+            solve(&s, &b, (&scene.display().to_string(), scene::strip_bom(&text)), &out, quiet)
+        }),
         Command::Demo { out } => scene::parse(DEMO_NAME, DEMO_SCENE)
             // Every tenth time step of the ~160 to rest is enough to watch the sewing.
             .map(|s| Scene { output: scene::OutputSpec { every: s.output.every.max(DEMO_OUTPUT_EVERY), ..s.output.clone() }, ..s })
             .and_then(|s| scene::build(&s, DEMO_NAME, DEMO_SCENE).map(|b| (s, b)))
             .map_err(|e| e.to_string())
-            .and_then(|(s, b)| solve(&s, &b, &out, false)),
+            .and_then(|(s, b)| solve(&s, &b, (DEMO_NAME, DEMO_SCENE), &out, false)),
         Command::Check { scene, .. } if let Some(r) = plyshell::mannequin::check_file(&scene) => r.map(|d| say!("{}: {d}", scene.display())).map_err(|e| e.to_string()),
         Command::Check { scene, json } => scene::load(&scene).map_err(|e| e.to_string()).and_then(|(s, b)| check(&scene, &s, &b, json.as_deref())),
         Command::Export { scene, inp } => scene::load(&scene).map_err(|e| e.to_string()).and_then(|(s, b)| export_inp(&s, &b, &inp)),
         Command::Import { pattern, out, size, units } => import(&pattern, &out, size.as_deref(), units),
         Command::Compare { scenes, out, quiet } => compare(&scenes, &out, quiet),
         Command::Bench { json, quick, drive } => if drive { bench::drive::run_drive(&json, quick) } else { bench::run_all(&json, quick) }.map_err(|e| e.to_string()),
-        Command::Study { scene, out, sizes, tolerances, discrete_only, vtu } => {
+        Command::Study { scene, out, sizes, tolerances, discrete_only, ply_models, vtu } => (|| {
             use plyshell::garment::PlyModel;
-            let ply_models = if discrete_only { vec![PlyModel::Discrete] } else { vec![PlyModel::Laminate, PlyModel::Discrete] };
+            let named = ply_models
+                .iter()
+                .map(|m| match m.to_ascii_lowercase().as_str() {
+                    "laminate" => Ok(PlyModel::Laminate),
+                    "auto" => Ok(PlyModel::Auto),
+                    "discrete" => Ok(PlyModel::Discrete),
+                    other => Err(format!("--ply-models: unknown ply model \"{other}\" (expected laminate, auto or discrete)")),
+                })
+                .collect::<Result<Vec<_>, _>>()?;
+            let ply_models = if discrete_only { vec![PlyModel::Discrete] } else if named.is_empty() { vec![PlyModel::Laminate, PlyModel::Auto, PlyModel::Discrete] } else { named };
             let options = plyshell::study::StudyOptions { sizes, tolerances, ply_models, out: out.clone(), vtu };
             plyshell::study::run_study(&scene, &options, &mut |m| warn!("{m}")).map(|rows| {
                 say!("{}", plyshell::study::markdown(&scene.display().to_string(), &rows));
                 say!("wrote {}", ["study.md", "study.json", "study.svg"].map(|f| out.join(f).display().to_string()).join(", "));
             })
-        }
+        })(),
         Command::Body { measurements, pose, motion, resolution, out } => body(measurements.as_deref(), pose.as_deref(), motion.as_deref(), resolution, &out),
         Command::Fuzz { corpus, seed, count, solve_every, jobs, work, check_timeout, solve_timeout } => {
             fuzz(corpus, seed, count, solve_every, jobs, work, check_timeout, solve_timeout)
@@ -439,7 +454,7 @@ fn summary(scene: &Scene, built: &BuiltScene) {
     }
 }
 
-fn solve(scene: &Scene, built: &BuiltScene, out: &Path, quiet: bool) -> Result<(), String> {
+fn solve(scene: &Scene, built: &BuiltScene, source: (&str, &str), out: &Path, quiet: bool) -> Result<(), String> {
     if out.exists() && !out.is_dir() {
         return Err(format!("--out {}: exists and is not a directory; name a directory for the results", out.display()));
     }
@@ -470,7 +485,16 @@ fn solve(scene: &Scene, built: &BuiltScene, out: &Path, quiet: bool) -> Result<(
         bar.set_message(msg);
     };
     let options = RunOptions { out_dir: Some(out.to_path_buf()) };
-    let result = analysis::run(scene, built, &options, &mut progress);
+    let result = if plyshell::analysis_auto::is_auto(scene) {
+        plyshell::analysis_auto::run(scene, source.0, source.1, &options, &mut progress).map(|r| {
+            for line in plyshell::analysis_auto::describe(&r) {
+                say!("{line}");
+            }
+            r.summary
+        })
+    } else {
+        analysis::run(scene, built, &options, &mut progress)
+    };
     bar.finish_and_clear();
     match result {
         Ok(s) => {

@@ -128,6 +128,10 @@ pub struct Summary {
     /// comparisons between runs, `plyshell study`).
     #[serde(skip)]
     pub final_positions: Vec<[f64; 3]>,
+    /// The last converged state itself (not written; for post-processing such as the
+    /// `ply_model: Auto` criterion, `garment::ply_auto`).
+    #[serde(skip)]
+    pub final_state: Option<crate::model::State>,
 }
 
 /// Peak resident set size of this process in MiB (Linux `VmHWM`).

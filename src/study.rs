@@ -1,5 +1,6 @@
 //! `plyshell study SCENE.ron`: the scene's garment solved at increasing fidelity — mesh
-//! levels (element size multipliers, or `Auto` tolerances) × ply models (laminate, discrete)
+//! levels (element size multipliers, or `Auto` tolerances) × ply models (laminate, `Auto`
+//! — laminate, then discrete plies where they would slide, `analysis_auto` —, discrete)
 //! — and each run's wall time and error against the finest discrete model: drape shape
 //! (RMS and largest distance between the deformed garment surfaces / garment size), seam
 //! forces, clearance to the bodies, drape coefficient where the scene measures it. Writes a
@@ -79,6 +80,10 @@ pub struct StudyRow {
     /// Drape coefficient (%) and its difference from the reference (points), where measured.
     pub drape_coefficient: Option<f64>,
     pub drape_error: Option<f64>,
+    /// `ply_model: Auto` runs: the model chosen per panel with its slip and peel ratios, and
+    /// the solves run (1: the laminate was kept; 2: laminate, then the resolved model).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub auto: Option<serde_json::Value>,
 }
 
 /// Process CPU time (user + system, s) from /proc/self/stat (Linux; 0 elsewhere).
@@ -237,6 +242,9 @@ struct Run {
 #[allow(clippy::too_many_arguments)]
 fn solve(file: &str, text: &str, scene: &Scene, label: &str, mesh: String, ply: PlyModel, out: Option<PathBuf>, log: &mut dyn FnMut(&str)) -> Result<Run, String> {
     let (c0, t0) = (cpu_seconds(), Instant::now());
+    if ply == PlyModel::Auto {
+        return solve_auto(file, text, scene, label, mesh, out, log);
+    }
     let built = scene::build(scene, file, text).map_err(|e| format!("{label}: {e}"))?;
     let build_s = t0.elapsed().as_secs_f64();
     let sizes = built.garment.as_ref().map(|l| l.part_element_size.iter().flatten().copied().filter(|&h| h > 0.0).fold([f64::INFINITY, 0.0], |a, h| [a[0].min(h), a[1].max(h)])).unwrap_or([0.0; 2]);
@@ -275,8 +283,56 @@ fn solve(file: &str, text: &str, scene: &Scene, label: &str, mesh: String, ply: 
         clearance_error: None,
         drape_coefficient: drape,
         drape_error: None,
+        auto: None,
     };
     log(&format!("{label}: {} DOFs, {} Newton iterations, {wall_s:.1} s wall, {cpu_s:.1} s CPU, {}", row.dofs, row.newton_iterations, row.status));
+    Ok(Run { row, surface })
+}
+
+/// An `Auto` run (`analysis_auto`: laminate, then discrete plies where they would slide):
+/// build and solve times of both passes together.
+fn solve_auto(file: &str, text: &str, scene: &Scene, label: &str, mesh: String, out: Option<PathBuf>, log: &mut dyn FnMut(&str)) -> Result<Run, String> {
+    let (c0, t0) = (cpu_seconds(), Instant::now());
+    log(&format!("{label}: ply_model Auto, solving (laminate first)…"));
+    let (run, status) = match crate::analysis_auto::run(scene, file, text, &RunOptions { out_dir: out }, &mut |_| {}) {
+        Ok(r) => (r, "completed".to_string()),
+        Err(e) => return Err(format!("{label}: {e}")),
+    };
+    let wall_s = t0.elapsed().as_secs_f64();
+    let cpu_s = cpu_seconds() - c0;
+    for line in crate::analysis_auto::describe(&run) {
+        log(&format!("{label}: {line}"));
+    }
+    let (built, summary) = (&run.built, &run.summary);
+    let sizes = built.garment.as_ref().map(|l| l.part_element_size.iter().flatten().copied().filter(|&h| h > 0.0).fold([f64::INFINITY, 0.0], |a, h| [a[0].min(h), a[1].max(h)])).unwrap_or([0.0; 2]);
+    let surface = Surface::new(built, &summary.final_positions);
+    let clear = clearance(built, &surface);
+    let drape = summary.extra.get("drape").and_then(|d| d.get("drape_coefficient_percent")).and_then(|v| v.as_f64());
+    let row = StudyRow {
+        label: label.to_string(),
+        ply_model: ply_name(PlyModel::Auto).into(),
+        mesh,
+        element_size: sizes,
+        nodes: summary.sizes.nodes,
+        elements: summary.sizes.elements,
+        dofs: summary.sizes.dofs,
+        newton_iterations: summary.newton_iterations,
+        build_s: 0.0,
+        wall_s,
+        cpu_s,
+        status,
+        shape_rms: 0.0,
+        shape_max: 0.0,
+        seam_force_error: None,
+        seam_forces: seam_forces(summary),
+        clearance_min: clear.map(|c| c.0),
+        clearance_mean: clear.map(|c| c.1),
+        clearance_error: None,
+        drape_coefficient: drape,
+        drape_error: None,
+        auto: summary.extra.get("ply_model_auto").cloned(),
+    };
+    log(&format!("{label}: {} DOFs, {} Newton iterations, {wall_s:.1} s wall, {cpu_s:.1} s CPU, {} ({} pass(es))", row.dofs, row.newton_iterations, row.status, run.passes));
     Ok(Run { row, surface })
 }
 
@@ -397,6 +453,7 @@ fn failed_row(label: String, mesh: String, ply: PlyModel, error: String) -> Stud
         clearance_error: None,
         drape_coefficient: None,
         drape_error: None,
+        auto: None,
     }
 }
 
@@ -420,6 +477,23 @@ pub fn markdown(scene: &str, rows: &[StudyRow]) -> String {
             r.label, r.nodes, r.dofs, r.newton_iterations, r.wall_s, r.cpu_s, 100.0 * r.shape_rms, 100.0 * r.shape_max, pct(r.seam_force_error), r.status
         ));
     }
+    let autos: Vec<&StudyRow> = rows.iter().filter(|r| r.auto.is_some()).collect();
+    if !autos.is_empty() {
+        t.push_str("\n`ply_model: Auto` (slip and peel ratios of the laminated first pass against their limits; `garment::ply_auto`):\n\n");
+        for r in autos {
+            let Some(a) = &r.auto else { continue };
+            let passes = a.get("passes").and_then(|v| v.as_u64()).unwrap_or(0);
+            let panels: Vec<String> = a.get("panels").and_then(|v| v.as_array()).map_or(Vec::new(), |ps| {
+                ps.iter()
+                    .map(|p| {
+                        let f = |k: &str| p.get(k).and_then(|v| v.as_f64()).map_or("–".into(), |x| format!("{x:.3}"));
+                        format!("{} → {} (slip {}, peel {})", p.get("panel").and_then(|v| v.as_str()).unwrap_or("?"), p.get("model").and_then(|v| v.as_str()).unwrap_or("?"), f("slip_ratio"), f("peel_ratio"))
+                    })
+                    .collect()
+            });
+            t.push_str(&format!("- {}: {} solve(s); {}\n", r.label, passes, panels.join("; ")));
+        }
+    }
     t
 }
 
@@ -431,7 +505,7 @@ fn write_reports(dir: &Path, scene: &str, rows: &[StudyRow]) -> Result<(), Strin
     let json = serde_json::to_vec_pretty(&serde_json::json!({ "scene": scene, "runs": rows })).map_err(|e| e.to_string())?;
     crate::io::atomic::write_atomic(&dir.join("study.json"), &json).map_err(|e| format!("study.json: {e}"))?;
     let mut series: Vec<Series> = Vec::new();
-    for (name, pick) in [("laminate", "laminate h"), ("discrete", "discrete h"), ("laminate, Auto size", "laminate auto"), ("discrete, Auto size", "discrete auto")] {
+    for (name, pick) in [("laminate", "laminate h"), ("Auto plies", "auto h"), ("discrete", "discrete h"), ("laminate, Auto size", "laminate auto"), ("Auto plies, Auto size", "auto auto"), ("discrete, Auto size", "discrete auto")] {
         let points: Vec<(f64, f64)> = rows.iter().filter(|r| r.label.starts_with(pick) && r.shape_rms > 0.0 && r.wall_s > 0.0).map(|r| (r.wall_s, 100.0 * r.shape_rms)).collect();
         if !points.is_empty() {
             series.push(Series { name: name.into(), points, reference: false });

@@ -10,6 +10,7 @@ pub mod measures;
 pub mod mesh;
 pub mod picture;
 pub mod place;
+pub mod ply_auto;
 pub mod seam;
 pub mod sizing;
 pub mod spec;

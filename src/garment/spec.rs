@@ -57,7 +57,9 @@ pub enum PlyModel {
     /// theory); no stitch lines or inter-ply contact within it.
     Laminate,
     /// Laminate where the plies move as one, discrete plies where they would slide or
-    /// separate (not implemented yet).
+    /// separate: a laminated first solve, then per panel (and sewn group) the slip and peel
+    /// criterion of `garment::ply_auto` and, if any panel changes, a second solve
+    /// (`analysis_auto`).
     Auto,
 }
 

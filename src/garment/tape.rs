@@ -46,6 +46,9 @@ impl ShellMaterial for Scaled {
         Ok((stress * self.factor, energy * self.factor))
     }
 
+    fn as_laminate(&self) -> Option<(&crate::material::Laminate, f64)> {
+        self.base.as_laminate().map(|(l, f)| (l, f * self.factor))
+    }
     fn small_strain_moduli(&self) -> (f64, f64) {
         let (e, nu) = self.base.small_strain_moduli();
         (self.factor * e, nu)

@@ -178,6 +178,10 @@ impl ShellMaterial for Laminate {
         Some(self.total)
     }
 
+    fn as_laminate(&self) -> Option<(&Laminate, f64)> {
+        Some((self, 1.0))
+    }
+
     /// Σ of the plies' areal densities when every ply has one.
     fn areal_density(&self) -> Option<f64> {
         self.plies.iter().map(|p| p.areal_density.or_else(|| p.material.areal_density())).sum()

@@ -101,6 +101,12 @@ pub trait ShellMaterial: Send + Sync + std::fmt::Debug {
     fn areal_density(&self) -> Option<f64> {
         None
     }
+    /// The laminate, if this section law stacks plies, and the factor its stresses are
+    /// scaled by (1, or a taped seam's stiffness factor): for per-ply post-processing such as
+    /// the `ply_model: Auto` criterion.
+    fn as_laminate(&self) -> Option<(&Laminate, f64)> {
+        None
+    }
 }
 
 /// Converts Young's modulus and Poisson ratio to bulk and shear moduli (K, μ).

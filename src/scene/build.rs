@@ -197,6 +197,12 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
         Some(g) => {
             let mut g = crate::pattern::resolve(g, base_dir).map_err(|(field, message)| loc.at(None, Some("pattern"), field, message))?;
             crate::garment::arrange::resolve(&mut g, scene.contact.as_ref(), base_dir, &loc)?;
+            // `ply_model: Auto` builds its first pass: the Auto panels laminated (but those
+            // sewn to explicitly discrete plies); `analysis_auto` decides the second.
+            if crate::garment::laminate::has_auto(&g) {
+                crate::garment::laminate::check(&g, &loc)?;
+                g = crate::garment::laminate::resolve_auto(&g, &[]).0;
+            }
             Some(g)
         }
         None => None,
