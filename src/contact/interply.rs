@@ -65,7 +65,7 @@ mod pair;
 mod settings;
 
 use pair::{boxes, closest, pair_forces, project, pv, Eval, History, PairForces, Record, Surface};
-pub use settings::{garment_setup, InterplyFormulation, InterplySettings, InterplySetup, InterplySpec};
+pub use settings::{InterplyFormulation, InterplySettings, InterplySetup, InterplySpec};
 
 /// A pair counts as sliding when k_t|s| > 2μλ_N (the friction force exceeds tanh 2 = 96 %
 /// of μλ_N), as for rigid bodies.

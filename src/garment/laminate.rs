@@ -25,7 +25,7 @@ use std::sync::Arc;
 use super::assemble::GarmentPart;
 use super::spec::{GarmentSpec, PanelSpec, PlyModel};
 use crate::material::{LaminaPly, Laminate, ShellMaterial};
-use crate::scene::{Locator, SceneError};
+use crate::input::{Locator, SceneError};
 
 /// Rejects ply models that cannot be built: an explicit `Laminate` or `Auto` on a panel of a
 /// single ply, and a sewn (`closing`) seam between an explicitly laminated and an explicitly

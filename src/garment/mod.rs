@@ -11,6 +11,7 @@ pub mod mesh;
 pub mod picture;
 pub mod place;
 pub mod ply_auto;
+pub mod ply_contact;
 pub mod seam;
 pub mod sizing;
 pub mod spec;
@@ -28,7 +29,7 @@ use nalgebra::Vector3;
 
 use crate::element::DirectorFrame;
 use crate::model::{Load, Tie};
-use crate::scene::{Locator, SceneError, SeamSpec};
+use crate::input::{Locator, SceneError};
 
 /// Ties of the scene's seams (`Scene::seams`): each seam's master and slave node sets are
 /// rows in span order; a named `closing` load pattern closes the initial gap. Errors name

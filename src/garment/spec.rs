@@ -349,3 +349,29 @@ pub struct StitchLineSpec {
     /// Polyline in pattern coordinates.
     pub points: Vec<[f64; 2]>,
 }
+
+/// A seam between two ordered node sets (e.g. `Edge` selectors), running the same way.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SeamSpec {
+    /// Seam name.
+    pub name: String,
+    /// Master node row (a node set).
+    pub master: String,
+    /// Slave node row (a node set); make the finer row the slave.
+    pub slave: String,
+    /// Plain (hinge), Welded or Taped.
+    pub kind: crate::garment::SeamKind,
+    /// A `Closure` load pattern whose scale drives the initial gap between the rows to zero
+    /// (virtual sewing); without it the initial gap is kept.
+    #[serde(default)]
+    pub closing: Option<String>,
+    /// Stitch stiffness per length (N/m per metre of seam = N/m²): a compliant seam of
+    /// springs instead of rigid translation ties (`garment::compliant`).
+    #[serde(default)]
+    pub stiffness: Option<f64>,
+    /// Seam strength (N per metre of seam, as from a seam strength test): utilisation =
+    /// force per length / strength in the results.
+    #[serde(default)]
+    pub strength: Option<f64>,
+}

@@ -598,7 +598,7 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
         warnings.extend(gm.unsupported(g, &loc, &supported).into_iter().map(|e| e.to_string()));
     }
     let interply = match &garment {
-        Some((g, gm)) => crate::contact::interply::garment_setup(g, gm, garment_first_part, &loc)?,
+        Some((g, gm)) => crate::garment::ply_contact::interply_setup(g, gm, garment_first_part, &loc)?,
         None => None,
     };
     // A linear step is one update from the current state: the barrier's collision detection
