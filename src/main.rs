@@ -349,7 +349,8 @@ fn compare(scenes: &[PathBuf], out: &Path, quiet: bool) -> Result<(), String> {
         let now = started.elapsed().as_secs_f64();
         if last.as_ref().is_none_or(|(v, step, at)| v != variant || *step != p.step || now - at >= 10.0) {
             last = Some((variant.to_string(), p.step, now));
-            warn!("[{now:8.1} s] {variant}: step {} iter {} residual {:.2e}", p.step + 1, p.iteration, p.residual);
+            let clock = p.dynamic.map(|(t, k)| format!(" time step {k} t = {t:.4} s")).unwrap_or_default();
+            warn!("[{now:8.1} s] {variant}: step {} iter {} residual {:.2e}{clock}", p.step + 1, p.iteration, p.residual);
         }
     };
     let report = plyshell::compare::run(&variants, out, &mut progress)?;
@@ -473,7 +474,10 @@ fn solve(scene: &Scene, built: &BuiltScene, source: (&str, &str), out: &Path, qu
     let started = std::time::Instant::now();
     let mut last_line: Option<(usize, f64)> = None;
     let mut progress = |p: &Progress| {
-        let msg = format!("step {} '{}' iter {} residual {:.2e}", p.step + 1, names.get(p.step).map(String::as_str).unwrap_or(""), p.iteration, p.residual);
+        let mut msg = format!("step {} '{}' iter {} residual {:.2e}", p.step + 1, names.get(p.step).map(String::as_str).unwrap_or(""), p.iteration, p.residual);
+        if let Some((t, k)) = p.dynamic {
+            msg.push_str(&format!(" time step {k} t = {t:.4} s"));
+        }
         if lines {
             let now = started.elapsed().as_secs_f64();
             if last_line.is_none_or(|(step, at)| step != p.step || now - at >= PROGRESS_EVERY) {

@@ -222,7 +222,7 @@ impl<'m> Solver<'m> {
                     let saved = state.clone();
                     let frac = inc as f64 / n_inc as f64;
                     let outcome = loop {
-                        let mut report = |it: usize, res: f64| progress(&Progress { step: si, fraction: frac, iteration: it, residual: res });
+                        let mut report = |it: usize, res: f64| progress(&Progress { step: si, fraction: frac, iteration: it, residual: res, dynamic: None });
                         self.begin_nodal_increment(dl / length);
                         let attempt = self.path_increment(state, start, &step.target_scales, lambda, Constraint::Arc { length: dl }, prev_du.as_deref(), &mask, &mut report);
                         match attempt {
@@ -255,7 +255,7 @@ impl<'m> Solver<'m> {
                         // branch just followed); keep the arc-length result if that fails.
                         let arc_state = std::mem::replace(state, saved.clone());
                         let target = (lambda + dlam).signum() * max_load_factor;
-                        let mut report = |it: usize, res: f64| progress(&Progress { step: si, fraction: frac, iteration: it, residual: res });
+                        let mut report = |it: usize, res: f64| progress(&Progress { step: si, fraction: frac, iteration: it, residual: res, dynamic: None });
                         match self.attempt(state, &scales_at(target), false, None, &mut report) {
                             Attempt::Converged { iterations: k, residuals: r, indefinite: ind, energy: e } => {
                                 iterations += k;
@@ -316,7 +316,7 @@ impl<'m> Solver<'m> {
                     loop {
                         let next = (tau + dtau).min(goal);
                         let saved = state.clone();
-                        let mut report = |it: usize, res: f64| progress(&Progress { step: si, fraction: next, iteration: it, residual: res });
+                        let mut report = |it: usize, res: f64| progress(&Progress { step: si, fraction: next, iteration: it, residual: res, dynamic: None });
                         let c = Constraint::Displacement { eq, delta: (next - tau) * value };
                         self.begin_nodal_increment((next - tau) * n_inc as f64);
                         match self.path_increment(state, start, &step.target_scales, lambda, c, prev_du.as_deref(), &mask, &mut report) {

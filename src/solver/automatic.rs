@@ -71,7 +71,7 @@ impl Solver<'_> {
             if let Some((old, tau_old)) = &previous {
                 extrapolate(state, old, (next - tau) / (tau - tau_old));
             }
-            let mut report_progress = |it: usize, res: f64| progress(&Progress { step: si, fraction: next, iteration: it, residual: res });
+            let mut report_progress = |it: usize, res: f64| progress(&Progress { step: si, fraction: next, iteration: it, residual: res, dynamic: None });
             self.begin_nodal_increment((next - tau) * step.increments.max(1) as f64);
             self.begin_nodal_motion(step.static_clock(clock0, next), state);
             force_scale.0 = if converged > 0 { force_sum / converged as f64 } else { 0.0 };

@@ -617,7 +617,7 @@ impl<'m> Solver<'m> {
         for k in 1..=ds.max_steps {
             let scales = at(t + dt);
             let mut report_progress = |it: usize, res: f64| {
-                progress(&Progress { step: si, fraction: fraction_done + fraction_step * ((t + dt) / ds.max_time).min(1.0), iteration: it, residual: res })
+                progress(&Progress { step: si, fraction: fraction_done + fraction_step * ((t + dt) / ds.max_time).min(1.0), iteration: it, residual: res, dynamic: Some((t + dt, k)) })
             };
             // Predictor: constant velocity would overshoot at rest; start from the last state.
             *state = prev.state.clone();

@@ -667,7 +667,7 @@ impl<'m> Solver<'m> {
                     let trial_scales = at(next);
                     let saved = state.clone();
                     let frac = (done_before as f64 + next * n_inc as f64) / total as f64;
-                    let mut report_progress = |it: usize, res: f64| progress(&Progress { step: si, fraction: frac, iteration: it, residual: res });
+                    let mut report_progress = |it: usize, res: f64| progress(&Progress { step: si, fraction: frac, iteration: it, residual: res, dynamic: None });
                     self.begin_nodal_increment((next - tau) * n_inc as f64);
                     self.begin_nodal_motion(step.static_clock(clock0, next), state);
                     let outcome = match step.kind {

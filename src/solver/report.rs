@@ -72,6 +72,9 @@ pub struct Progress {
     pub iteration: usize,
     /// Current relative residual.
     pub residual: f64,
+    /// In a `Dynamic` step: the simulated time (s) the current time step reaches and its
+    /// number (a step to rest has no known fraction done).
+    pub dynamic: Option<(f64, usize)>,
 }
 
 /// Why a solve stopped.
