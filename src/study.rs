@@ -247,79 +247,46 @@ fn solve(file: &str, text: &str, scene: &Scene, label: &str, mesh: String, ply: 
     }
     let built = scene::build(scene, file, text).map_err(|e| format!("{label}: {e}"))?;
     let build_s = t0.elapsed().as_secs_f64();
-    let sizes = built.garment.as_ref().map(|l| l.part_element_size.iter().flatten().copied().filter(|&h| h > 0.0).fold([f64::INFINITY, 0.0], |a, h| [a[0].min(h), a[1].max(h)])).unwrap_or([0.0; 2]);
     log(&format!("{label}: {} nodes, {} elements, solving…", built.model.n_nodes(), built.model.elements.len()));
     let t1 = Instant::now();
     let (summary, status) = match analysis::run(scene, &built, &RunOptions { out_dir: out }, &mut |_| {}) {
         Ok(s) => (s, "completed".to_string()),
         Err(analysis::RunError::Solve { error, summary }) => (*summary, format!("failed: {error}")),
-        Err(analysis::RunError::Io(e)) => return Err(format!("{label}: {e}")),
         Err(e) => return Err(format!("{label}: {e}")),
     };
-    let wall_s = t1.elapsed().as_secs_f64();
-    let cpu_s = cpu_seconds() - c0;
-    let surface = Surface::new(&built, &summary.final_positions);
-    let clear = clearance(&built, &surface);
-    let drape = summary.extra.get("drape").and_then(|d| d.get("drape_coefficient_percent")).and_then(|v| v.as_f64());
-    let row = StudyRow {
-        label: label.to_string(),
-        ply_model: ply_name(ply).into(),
-        mesh,
-        element_size: sizes,
-        nodes: summary.sizes.nodes,
-        elements: summary.sizes.elements,
-        dofs: summary.sizes.dofs,
-        newton_iterations: summary.newton_iterations,
-        build_s,
-        wall_s,
-        cpu_s,
-        status,
-        shape_rms: 0.0,
-        shape_max: 0.0,
-        seam_force_error: None,
-        seam_forces: seam_forces(&summary),
-        clearance_min: clear.map(|c| c.0),
-        clearance_mean: clear.map(|c| c.1),
-        clearance_error: None,
-        drape_coefficient: drape,
-        drape_error: None,
-        auto: None,
-    };
-    log(&format!("{label}: {} DOFs, {} Newton iterations, {wall_s:.1} s wall, {cpu_s:.1} s CPU, {}", row.dofs, row.newton_iterations, row.status));
-    Ok(Run { row, surface })
+    let timing = Timing { build_s, wall_s: t1.elapsed().as_secs_f64(), cpu_s: cpu_seconds() - c0 };
+    let run = measured_run(label, ply, mesh, &built, &summary, status, timing);
+    log(&format!("{label}: {} DOFs, {} Newton iterations, {:.1} s wall, {:.1} s CPU, {}", run.row.dofs, run.row.newton_iterations, timing.wall_s, timing.cpu_s, run.row.status));
+    Ok(run)
 }
 
-/// An `Auto` run (`analysis_auto`: laminate, then discrete plies where they would slide):
-/// build and solve times of both passes together.
-fn solve_auto(file: &str, text: &str, scene: &Scene, label: &str, mesh: String, out: Option<PathBuf>, log: &mut dyn FnMut(&str)) -> Result<Run, String> {
-    let (c0, t0) = (cpu_seconds(), Instant::now());
-    log(&format!("{label}: ply_model Auto, solving (laminate first)…"));
-    let (run, status) = match crate::analysis_auto::run(scene, file, text, &RunOptions { out_dir: out }, &mut |_| {}) {
-        Ok(r) => (r, "completed".to_string()),
-        Err(e) => return Err(format!("{label}: {e}")),
-    };
-    let wall_s = t0.elapsed().as_secs_f64();
-    let cpu_s = cpu_seconds() - c0;
-    for line in crate::analysis_auto::describe(&run) {
-        log(&format!("{label}: {line}"));
-    }
-    let (built, summary) = (&run.built, &run.summary);
-    let sizes = built.garment.as_ref().map(|l| l.part_element_size.iter().flatten().copied().filter(|&h| h > 0.0).fold([f64::INFINITY, 0.0], |a, h| [a[0].min(h), a[1].max(h)])).unwrap_or([0.0; 2]);
+/// Build, wall and CPU seconds of one variant.
+#[derive(Clone, Copy)]
+struct Timing {
+    build_s: f64,
+    wall_s: f64,
+    cpu_s: f64,
+}
+
+/// The row of a solved variant (errors against the reference not yet filled; an `Auto`
+/// run's choices from its summary) and its deformed surface.
+fn measured_run(label: &str, ply: PlyModel, mesh: String, built: &BuiltScene, summary: &Summary, status: String, timing: Timing) -> Run {
+    let element_size = built.garment.as_ref().map(|l| l.part_element_size.iter().flatten().copied().filter(|&h| h > 0.0).fold([f64::INFINITY, 0.0], |a, h| [a[0].min(h), a[1].max(h)])).unwrap_or([0.0; 2]);
     let surface = Surface::new(built, &summary.final_positions);
     let clear = clearance(built, &surface);
     let drape = summary.extra.get("drape").and_then(|d| d.get("drape_coefficient_percent")).and_then(|v| v.as_f64());
     let row = StudyRow {
         label: label.to_string(),
-        ply_model: ply_name(PlyModel::Auto).into(),
+        ply_model: ply_name(ply).into(),
         mesh,
-        element_size: sizes,
+        element_size,
         nodes: summary.sizes.nodes,
         elements: summary.sizes.elements,
         dofs: summary.sizes.dofs,
         newton_iterations: summary.newton_iterations,
-        build_s: 0.0,
-        wall_s,
-        cpu_s,
+        build_s: timing.build_s,
+        wall_s: timing.wall_s,
+        cpu_s: timing.cpu_s,
         status,
         shape_rms: 0.0,
         shape_max: 0.0,
@@ -332,8 +299,25 @@ fn solve_auto(file: &str, text: &str, scene: &Scene, label: &str, mesh: String, 
         drape_error: None,
         auto: summary.extra.get("ply_model_auto").cloned(),
     };
-    log(&format!("{label}: {} DOFs, {} Newton iterations, {wall_s:.1} s wall, {cpu_s:.1} s CPU, {} ({} pass(es))", row.dofs, row.newton_iterations, row.status, run.passes));
-    Ok(Run { row, surface })
+    Run { row, surface }
+}
+
+/// An `Auto` run (`analysis_auto`: laminate, then discrete plies where they would slide):
+/// build and solve times of both passes together.
+fn solve_auto(file: &str, text: &str, scene: &Scene, label: &str, mesh: String, out: Option<PathBuf>, log: &mut dyn FnMut(&str)) -> Result<Run, String> {
+    let (c0, t0) = (cpu_seconds(), Instant::now());
+    log(&format!("{label}: ply_model Auto, solving (laminate first)…"));
+    let (run, status) = match crate::analysis_auto::run(scene, file, text, &RunOptions { out_dir: out }, &mut |_| {}) {
+        Ok(r) => (r, "completed".to_string()),
+        Err(e) => return Err(format!("{label}: {e}")),
+    };
+    let timing = Timing { build_s: 0.0, wall_s: t0.elapsed().as_secs_f64(), cpu_s: cpu_seconds() - c0 };
+    for line in crate::analysis_auto::describe(&run) {
+        log(&format!("{label}: {line}"));
+    }
+    let out = measured_run(label, PlyModel::Auto, mesh, &run.built, &run.summary, status, timing);
+    log(&format!("{label}: {} DOFs, {} Newton iterations, {:.1} s wall, {:.1} s CPU, {} ({} pass(es))", out.row.dofs, out.row.newton_iterations, timing.wall_s, timing.cpu_s, out.row.status, run.passes));
+    Ok(out)
 }
 
 /// Fills each row's errors against the reference run.

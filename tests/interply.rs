@@ -27,47 +27,9 @@ use plyshell::model::{Model, State};
 use plyshell::scene;
 use plyshell::solver::Solver;
 
-const L: f64 = 0.1;
-const B: f64 = 0.02;
-const T: f64 = 0.001;
-const E: [f64; 3] = [2.0e7, 1.0e8, 2.0e8];
-const RHO: f64 = 0.3;
-const G: f64 = 9.81;
-const H: f64 = 0.005;
-
-fn cantilever(stitch_xs: &[f64]) -> String {
-    let lines: Vec<String> = stitch_xs
-        .iter()
-        .enumerate()
-        .map(|(i, x)| format!(r#"(name: "q{i}", panel: "strip", points: [({x}, 0.0), ({x}, {B})])"#))
-        .collect();
-    format!(
-        r#"Scene(
-    name: "interply_cantilever",
-    materials: {{"soft": StVenantKirchhoff(young: {e0:e}, poisson: 0.0), "mid": StVenantKirchhoff(young: {e1:e}, poisson: 0.0), "stiff": StVenantKirchhoff(young: {e2:e}, poisson: 0.0)}},
-    parts: [],
-    garment: Some((
-        element_size: {H},
-        plies: {{"top": (material: "soft", thickness: {T}, areal_density: {RHO}), "mid": (material: "mid", thickness: {T}, areal_density: {RHO}), "bot": (material: "stiff", thickness: {T}, areal_density: {RHO})}},
-        panels: [(name: "strip", outline: [(0.0, 0.0), ({L}, 0.0), ({L}, {B}), (0.0, {B})],
-                  edges: {{"root": (from: 3, to: 0), "tip": (from: 1, to: 2)}},
-                  grain: (1.0, 0.0), plies: ["top", "mid", "bot"])],
-        stitch_lines: [{lines}],
-        interply: (enabled: true, friction: 0.3),
-    )),
-    node_sets: {{"root_top": Edge(part: "strip/top", edge: "root"), "root_mid": Edge(part: "strip/mid", edge: "root"), "root_bot": Edge(part: "strip/bot", edge: "root")}},
-    boundary: [Clamp(set: "root_top"), Clamp(set: "root_mid"), Clamp(set: "root_bot")],
-    loads: {{"g1": Gravity(part: "strip/top", areal_density: {RHO}, g: (0.0, 0.0, -{G})), "g2": Gravity(part: "strip/mid", areal_density: {RHO}, g: (0.0, 0.0, -{G})), "g3": Gravity(part: "strip/bot", areal_density: {RHO}, g: (0.0, 0.0, -{G}))}},
-    steps: [(name: "load", increments: 2, scale: {{"g1": 1.0, "g2": 1.0, "g3": 1.0}})],
-    monitors: [(name: "tip", point: ({L}, 0.0, 0.0), part: Some("strip/mid"), dofs: [Uz])],
-    output: (vtu: false),
-)"#,
-        e0 = E[0],
-        e1 = E[1],
-        e2 = E[2],
-        lines = lines.join(", "),
-    )
-}
+#[path = "common/three_ply.rs"]
+mod three_ply;
+use three_ply::*;
 
 /// Largest penetration between adjacent plies (k, k+1) of `parts` (model part indices, in
 /// ply order): per node of ply k+1, (t_k + t_{k+1})/2 minus its signed distance to ply k's
@@ -126,7 +88,7 @@ struct Run {
 }
 
 fn solve(stitch_xs: &[f64]) -> Run {
-    solve_scene(&cantilever(stitch_xs))
+    solve_scene(&cantilever(stitch_xs, None))
 }
 
 /// Solves a cantilever scene; inter-ply contact where the scene has it (a laminate has
@@ -197,7 +159,7 @@ fn stitching_stiffens_plies_that_contact_keeps_apart() {
 
     // The node-to-surface penalty stays available as an explicit opt-in, with the same
     // bounds (3 % on the tip, 5 % of t penetration).
-    let penalty = solve_scene(&cantilever(&[]).replace("interply: (enabled: true, friction: 0.3)", "interply: (enabled: true, friction: 0.3, formulation: Penalty)"));
+    let penalty = solve_scene(&cantilever(&[], None).replace("interply: (enabled: true, friction: 0.3)", "interply: (enabled: true, friction: 0.3, formulation: Penalty)"));
     assert!(penalty.contact && !penalty.barrier, "formulation: Penalty gives the penalty contact");
     report("unbonded, penalty inter-ply contact (opt-in)", &penalty, w_unbonded);
     assert!((-penalty.tip / w_unbonded - 1.0).abs() < 0.03, "unbonded penalty tip {} vs {w_unbonded}", -penalty.tip);
@@ -354,7 +316,7 @@ fn laminate_of_three_bonded_plies_matches_the_stitched_cantilever() {
     let zbar = E.iter().zip(&z).map(|(e, z)| e * z).sum::<f64>() / E.iter().sum::<f64>();
     let composite: f64 = E.iter().zip(&z).map(|(e, z)| e * (i1 + B * T * (z - zbar).powi(2))).sum();
     let w_bonded = q * L.powi(4) / (8.0 * composite);
-    let text = cantilever(&[]).replace(r#"plies: ["top", "mid", "bot"])"#, r#"plies: ["top", "mid", "bot"], ply_model: Some(Laminate))"#);
+    let text = cantilever(&[], Some("Laminate"));
     assert!(text.contains("Laminate"));
     let lam = solve_scene(&text);
     let all: Vec<f64> = (1..=20).map(|i| i as f64 * H).collect();

@@ -23,43 +23,13 @@ use plyshell::analysis::RunOptions;
 use plyshell::analysis_auto;
 use plyshell::scene;
 
-const L: f64 = 0.1;
-const B: f64 = 0.02;
-const T: f64 = 0.001;
-const E: [f64; 3] = [2.0e7, 1.0e8, 2.0e8];
-const RHO: f64 = 0.3;
-const G: f64 = 9.81;
-const H: f64 = 0.005;
+#[path = "common/three_ply.rs"]
+mod three_ply;
+use three_ply::{B, E, G, H, L, RHO, T};
 
-/// The cantilever (as tests/interply.rs), quilted at `stitch_xs`, with the panel's `ply_model`.
+/// The shared three-ply cantilever (`tests/common/three_ply.rs`) with the panel's `ply_model`.
 fn cantilever(stitch_xs: &[f64], ply_model: &str) -> String {
-    let lines: Vec<String> = stitch_xs.iter().enumerate().map(|(i, x)| format!(r#"(name: "q{i}", panel: "strip", points: [({x}, 0.0), ({x}, {B})])"#)).collect();
-    format!(
-        r#"Scene(
-    name: "ply_auto_cantilever",
-    materials: {{"soft": StVenantKirchhoff(young: {e0:e}, poisson: 0.0), "mid": StVenantKirchhoff(young: {e1:e}, poisson: 0.0), "stiff": StVenantKirchhoff(young: {e2:e}, poisson: 0.0)}},
-    parts: [],
-    garment: Some((
-        element_size: {H},
-        plies: {{"top": (material: "soft", thickness: {T}, areal_density: {RHO}), "mid": (material: "mid", thickness: {T}, areal_density: {RHO}), "bot": (material: "stiff", thickness: {T}, areal_density: {RHO})}},
-        panels: [(name: "strip", outline: [(0.0, 0.0), ({L}, 0.0), ({L}, {B}), (0.0, {B})],
-                  edges: {{"root": (from: 3, to: 0), "tip": (from: 1, to: 2)}},
-                  grain: (1.0, 0.0), plies: ["top", "mid", "bot"], ply_model: Some({ply_model}))],
-        stitch_lines: [{lines}],
-        interply: (enabled: true, friction: 0.3),
-    )),
-    node_sets: {{"root_top": Edge(part: "strip/top", edge: "root"), "root_mid": Edge(part: "strip/mid", edge: "root"), "root_bot": Edge(part: "strip/bot", edge: "root")}},
-    boundary: [Clamp(set: "root_top"), Clamp(set: "root_mid"), Clamp(set: "root_bot")],
-    loads: {{"g1": Gravity(part: "strip/top", areal_density: {RHO}, g: (0.0, 0.0, -{G})), "g2": Gravity(part: "strip/mid", areal_density: {RHO}, g: (0.0, 0.0, -{G})), "g3": Gravity(part: "strip/bot", areal_density: {RHO}, g: (0.0, 0.0, -{G}))}},
-    steps: [(name: "load", increments: 2, scale: {{"g1": 1.0, "g2": 1.0, "g3": 1.0}})],
-    monitors: [(name: "tip", point: ({L}, 0.0, 0.0), part: Some("strip/mid"), dofs: [Uz])],
-    output: (vtu: false),
-)"#,
-        e0 = E[0],
-        e1 = E[1],
-        e2 = E[2],
-        lines = lines.join(", "),
-    )
+    three_ply::cantilever(stitch_xs, Some(ply_model))
 }
 
 /// Solves a scene (two passes for Auto): the run, the tip deflection (the monitor's Uz).
