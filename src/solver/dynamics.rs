@@ -219,7 +219,9 @@ struct Kinematics {
 enum TimeStep {
     Converged { iterations: usize, residuals: Vec<f64>, static_residual: f64, energy: f64, static_r: Vec<f64> },
     /// The effective tangent was not positive definite: Δt too large for this state.
-    Indefinite { iteration: usize, residuals: Vec<f64> },
+    /// `projected`: the element Hessians had been projected (a descent step), so what stays
+    /// indefinite comes from terms outside the elements.
+    Indefinite { iteration: usize, residuals: Vec<f64>, projected: bool },
     Failed { iteration: usize, residuals: Vec<f64>, worst_element: Option<usize>, cause: String },
 }
 
@@ -411,8 +413,28 @@ impl<'m> Solver<'m> {
                 self.residual(&mut r);
                 self.add_inertia(state, prev, mass, &co, &mut r);
                 let t = Instant::now();
-                kind = self.cholesky.factorize(&self.values);
+                kind = if self.cholesky.factorize_definite(&self.values) { Ok(FactorKind::Llt) } else { Ok(FactorKind::Ldlt) };
                 self.timings.factorization += t.elapsed().as_secs_f64();
+                if !matches!(kind, Ok(FactorKind::Llt)) {
+                    // Still indefinite: the rest comes from terms outside the elements that
+                    // keep their exact Hessian (surface contact pairs): project theirs too.
+                    // (The evaluation kept for this state has the exact blocks: evaluate anew,
+                    // and do not keep the projected one.)
+                    self.nodal_cache.forget();
+                    self.nodal_forces.iter_mut().for_each(|c| c.project_hessians(true));
+                    let assembled = self.assemble(state, scales, true);
+                    self.nodal_forces.iter_mut().for_each(|c| c.project_hessians(false));
+                    self.nodal_cache.forget();
+                    if let Err(f) = assembled {
+                        self.assembler.project = false;
+                        return TimeStep::Failed { iteration: it, residuals, worst_element: Some(f.element), cause: f.to_string() };
+                    }
+                    self.residual(&mut r);
+                    self.add_inertia(state, prev, mass, &co, &mut r);
+                    let t = Instant::now();
+                    kind = self.cholesky.factorize(&self.values);
+                    self.timings.factorization += t.elapsed().as_secs_f64();
+                }
             }
             if self.assembler.project {
                 self.timings.projected_iterations += 1;
@@ -423,7 +445,7 @@ impl<'m> Solver<'m> {
                 Ok(FactorKind::Llt) => {}
                 Ok(FactorKind::Ldlt) | Err(_) => {
                     self.assembler.project = false;
-                    return TimeStep::Indefinite { iteration: it, residuals };
+                    return TimeStep::Indefinite { iteration: it, residuals, projected: descent };
                 }
             }
             let t = Instant::now();
@@ -608,6 +630,7 @@ impl<'m> Solver<'m> {
         let mut t = 0.0;
         let mut dt = ds.dt;
         let mut rejected = 0usize;
+        let mut rejections: Vec<String> = Vec::new();
         let mut iterations = 0usize;
         let mut unstable_rests = 0usize;
         let mut saddle_escapes = 0usize;
@@ -684,7 +707,7 @@ impl<'m> Solver<'m> {
                         cutbacks: rejected,
                         indefinite_tangent: indefinite,
                         energy,
-                        dynamics: Some(DynamicInfo { time: t, dt, kinetic_energy: ke, static_residual, at_rest, end_of_step, rejected, unstable_rests, saddle_escapes, saddle }),
+                        dynamics: Some(DynamicInfo { time: t, dt, kinetic_energy: ke, static_residual, at_rest, end_of_step, rejected, rejections: std::mem::take(&mut rejections), unstable_rests, saddle_escapes, saddle }),
                         extra: std::mem::take(&mut self.extra_reports),
                         ..Default::default()
                     };
@@ -755,12 +778,23 @@ impl<'m> Solver<'m> {
                         TimeStep::Indefinite { iteration, .. } | TimeStep::Failed { iteration, .. } => *iteration,
                         TimeStep::Converged { .. } => 0,
                     };
+                    rejections.push(match &outcome {
+                        TimeStep::Indefinite { iteration, projected, .. } => format!(
+                            "Δt = {dt:.3e}: effective tangent not positive definite at iteration {iteration}{}",
+                            if *projected { " with the element and contact Hessians projected" } else { " (no potential: not projected)" }
+                        ),
+                        TimeStep::Failed { iteration, worst_element, cause, .. } => match worst_element {
+                            Some(el) => format!("Δt = {dt:.3e}: {cause} (iteration {iteration}, element {el})"),
+                            None => format!("Δt = {dt:.3e}: {cause} (iteration {iteration})"),
+                        },
+                        TimeStep::Converged { .. } => String::new(),
+                    });
                     *state = prev.state.clone();
                     self.assembler.forget_mixed();
                     rejected += 1;
                     dt *= 0.25;
                 }
-                TimeStep::Indefinite { iteration, residuals } => {
+                TimeStep::Indefinite { iteration, residuals, .. } => {
                     let cause = format!(
                         "time step {k} at t = {t:.4e}: effective tangent K + M/Δt² not positive definite even at Δt = {dt:.3e} ≤ 4 dt_min"
                     );

@@ -92,6 +92,14 @@ pub trait NodalForces: Send {
     fn stability_tangent(&mut self, on: bool) {
         let _ = on;
     }
+    /// Switches the Hessian blocks of [`NodalForces::add_coupled`] to their projection onto
+    /// the positive semi-definite cone (`on`) or back to the exact ones: a descent step whose
+    /// effective tangent stays indefinite after the element Hessians were projected asks for
+    /// it (terms that keep an exact, possibly indefinite Hessian for Newton's rate near a
+    /// solution, e.g. surface contact pairs). Default: no change (already PSD or none).
+    fn project_hessians(&mut self, on: bool) {
+        let _ = on;
+    }
     /// A summary of the whole run: (section name in summary.json, value).
     fn summary(&self) -> Option<(String, serde_json::Value)> {
         None

@@ -139,6 +139,9 @@ pub struct DynamicInfo {
     /// Time steps rejected (Newton failure or indefinite effective tangent) since the
     /// previous report.
     pub rejected: usize,
+    /// Why each of those attempts was rejected, with its Δt (e.g. "Δt = 2.5e-3: energy line
+    /// search failed: …"), oldest first.
+    pub rejections: Vec<String>,
     /// Time steps so far in this step that met the rest criteria at an unstable
     /// equilibrium (static tangent not positive definite) and were not accepted as rest.
     pub unstable_rests: usize,

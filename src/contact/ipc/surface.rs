@@ -215,6 +215,8 @@ pub struct SurfaceContact {
     /// Node → index in `points` (usize::MAX for a node without contact).
     point_index: Vec<usize>,
     last_potential: f64,
+    /// Report the pair Hessians projected onto the PSD cone ([`NodalForces::project_hessians`]).
+    project: bool,
     search_s: f64,
     /// Wall time split, for the summary.
     timings: std::sync::Mutex<SurfaceTimings>,
@@ -360,6 +362,7 @@ impl SurfaceContact {
             bound_margin,
             point_index,
             last_potential: 0.0,
+            project: false,
             search_s: 0.0,
             timings: std::sync::Mutex::new(SurfaceTimings::default()),
             increments: Vec::new(),
@@ -435,8 +438,20 @@ impl NodalForces for SurfaceContact {
             // more than adding it.
             let mut derivatives = std::mem::take(&mut self.derivatives);
             self.barrier_derivatives(&terms, &x, &mut derivatives);
-            for d in derivatives.iter().chain(terms.iter().filter_map(|t| t.mollified.as_deref())) {
+            if self.project {
+                derivatives.par_iter_mut().for_each(Derivative::project_hessian);
+            }
+            for d in derivatives.iter() {
                 blocks.add_derivative(d, f_ext, true);
+            }
+            for d in terms.iter().filter_map(|t| t.mollified.as_deref()) {
+                if self.project {
+                    let mut d = d.clone();
+                    d.project_hessian();
+                    blocks.add_derivative(&d, f_ext, true);
+                } else {
+                    blocks.add_derivative(d, f_ext, true);
+                }
             }
             self.derivatives = derivatives;
         }
@@ -459,6 +474,10 @@ impl NodalForces for SurfaceContact {
 
     fn potential(&self) -> Option<f64> {
         Some(self.last_potential)
+    }
+
+    fn project_hessians(&mut self, on: bool) {
+        self.project = on;
     }
 
     /// The barrier and friction energies at `state` summed as `add_coupled` sums them (the
