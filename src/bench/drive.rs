@@ -7,7 +7,11 @@
 //!   0.2 m resting on a ground plane, friction 0.4, barrier contact, a Dynamic step with
 //!   defaults to rest; the value is the vertical contact resultant over the weight ρ_A g A
 //!   (reference 1, static equilibrium). Materials: SVK with E h = 500 N/m, D = 5e-6 N·m,
-//!   ρ_A = 0.15 kg/m², and the `cotton_broadcloth` and `light_cotton` presets.
+//!   ρ_A = 0.15 kg/m², and the `cotton_broadcloth` and `light_cotton` presets. The
+//!   `_sequenced` rows solve the same drop by mesh sequencing (`coarse_levels`, from 16²
+//!   up, `analysis_sequence`): their counts and times are summed over the levels, and
+//!   `rms_to_direct_m` compares their rest positions with the direct solve's on the same
+//!   mesh (the paths differ, and with friction so may the rest states).
 //! - Sagging plate: a 0.6 m square plate, t = 0.4 mm, E = 2e8 Pa, ν = 0.3, ρ_A = 0.12
 //!   kg/m², clamped on one edge, sagging under its weight in a Static step with the default
 //!   (automatic) increments; the value is the tip deflection at the middle of the free edge,

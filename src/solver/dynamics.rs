@@ -135,8 +135,9 @@ pub struct DynamicSettings {
     /// Mesh sequencing (nested iteration) of a step to rest: solve it first to rest on the
     /// parts' grids coarsened `coarse_levels` times by 2 (elements per side halved, rounded
     /// up), map each rest state onto the next finer grid and continue there, the scene's
-    /// own mesh last (`analysis_sequence`). 0 (default): off. Only for the first step of a
-    /// scene whose parts are all `Rectangle` grids.
+    /// own mesh last (`analysis_sequence`: mapped nodes pushed out of the bodies, directors
+    /// relaxed with the mid-surface held, then the step goes on from rest). 0 (default):
+    /// off. Only for the first step of a scene whose parts are all `Rectangle` grids.
     pub coarse_levels: usize,
 }
 
@@ -565,7 +566,10 @@ impl<'m> Solver<'m> {
         if let Some((key, msg)) = check_settings(ds) {
             return Err(error(0, vec![], None, format!("invalid Dynamic setting {key}: {msg}"), 0.0));
         }
-        let free_mass = model.dofs.eq.iter().enumerate().any(|(g, &e)| e != FIXED && g % NODE_DOFS < 3 && mass.translational[g / NODE_DOFS] > 0.0);
+        let free_mass = model.dofs.eq.iter().enumerate().any(|(g, &e)| {
+            let m = if g % NODE_DOFS < 3 { mass.translational[g / NODE_DOFS] } else { mass.rotary[g / NODE_DOFS] };
+            e != FIXED && m > 0.0
+        });
         if !free_mass {
             return Err(error(
                 0,
