@@ -262,7 +262,8 @@ pub fn run_drive(json: &Path, quick: bool) -> Result<(), String> {
             r.rel_error
         );
         if !r.levels.is_empty() {
-            println!("{:<34} levels (time steps/Newton iterations) {}; rest positions {:.2e} m RMS from the direct solve", "", r.levels, r.rms_to_direct_m);
+            let rms = if r.rms_to_direct_m.is_finite() { format!("; rest positions {:.2e} m RMS from the direct solve", r.rms_to_direct_m) } else { String::new() };
+            println!("{:<34} levels (time steps/Newton iterations) {}{rms}", "", r.levels);
         }
     };
     for (name, material, section, load) in SHEETS {
