@@ -88,34 +88,6 @@ pub fn prolong(coarse: &Model, state: &State, fine: &Model, parts: &[(GridPart, 
     Ok((out, weights))
 }
 
-/// Sets the director of every node flagged in `nodes` to the unit normal of the current
-/// mid-surface there: the sum of the corner normals (a_ξ × a_η at the node's corner, i.e.
-/// weighted by the corner's parallelogram area) of the elements round the node, oriented
-/// along the node's current director; the frame's first tangent follows from the current
-/// one. A shell whose thickness is small against its curvature radii carries next to no
-/// transverse shear (the Kirchhoff limit), so the normal is its equilibrium director to
-/// O(h²/R²); interpolated coarse directors are not: MITC4 samples the transverse shear at
-/// edge midpoints only, so a coarse state may hold zigzag director tilts that cost it no
-/// energy but would strain the finer mesh in shear.
-pub fn normal_directors(model: &Model, state: &mut State, nodes: &[bool]) {
-    let mut normal = vec![Vector3::zeros(); model.n_nodes()];
-    for el in &model.elements {
-        let x = el.nodes.map(|n| model.position(state, n));
-        for k in 0..4 {
-            let (prev, next) = (x[(k + 3) % 4], x[(k + 1) % 4]);
-            normal[el.nodes[k]] += (next - x[k]).cross(&(prev - x[k]));
-        }
-    }
-    for (n, &on) in nodes.iter().enumerate() {
-        let m = normal[n];
-        if on && m.norm() > 0.0 {
-            let f = &state.frames[n];
-            let d = if m.dot(&f.d) < 0.0 { -m } else { m };
-            state.frames[n] = DirectorFrame::new(d, Some(f.t1));
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
