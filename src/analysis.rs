@@ -41,8 +41,26 @@ pub struct RunOptions {
 }
 
 /// Solves `built` (from `scene`), reporting progress, and writes VTU/PVD, summary.json and
-/// the monitor plot into the output directory.
+/// the monitor plot into the output directory. A first step with `coarse_levels` is solved
+/// by mesh sequencing (`analysis_sequence`).
 pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &mut dyn FnMut(&Progress)) -> Result<Summary, RunError> {
+    if crate::scene::sequence::coarse_levels(scene) > 0 {
+        return crate::analysis_sequence::run(scene, built, options, progress);
+    }
+    run_from(scene, built, options, None, progress)
+}
+
+/// A start other than the reference state: the state (at rest) and a report of how it was
+/// reached, kept in `summary.json` under `sequence`.
+pub struct Start {
+    /// The initial state.
+    pub state: State,
+    /// What produced it (mesh sequencing's levels).
+    pub report: serde_json::Value,
+}
+
+/// [`run`] without mesh sequencing, from `start` (the reference state when None).
+pub fn run_from(scene: &Scene, built: &BuiltScene, options: &RunOptions, start: Option<Start>, progress: &mut dyn FnMut(&Progress)) -> Result<Summary, RunError> {
     if crate::analysis_auto::is_auto(scene) {
         return Err(RunError::Setup("the garment has ply_model Auto, which is solved in two passes (laminate, then discrete plies where they would slide): run it with analysis_auto::run (as plyshell solve and study do)".into()));
     }
@@ -92,6 +110,14 @@ pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &m
     let mut io_error: Option<String> = None;
     let mut mode_files: Vec<String> = Vec::new();
     let mut state = model.initial_state();
+    if let Some(start) = start {
+        if start.state.u.len() != model.n_nodes() || start.state.frames.len() != model.n_nodes() {
+            return Err(RunError::Setup(format!("the start state has {} nodes, the model {}", start.state.u.len(), model.n_nodes())));
+        }
+        state = start.state;
+        solver.start_nodal_forces_from(&state);
+        summary.extra.insert("sequence".into(), start.report);
+    }
     let steps = &built.steps;
     let every = scene.output.every.max(1);
     // Series time (PVD, glTF poses): a step's pseudo-time (step index + fraction) except

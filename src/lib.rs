@@ -28,6 +28,7 @@ pub mod solver;
 pub mod scene;
 pub mod analysis;
 pub mod analysis_auto;
+pub mod analysis_sequence;
 pub mod compare;
 pub mod check;
 pub mod io;

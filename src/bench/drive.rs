@@ -7,7 +7,11 @@
 //!   0.2 m resting on a ground plane, friction 0.4, barrier contact, a Dynamic step with
 //!   defaults to rest; the value is the vertical contact resultant over the weight ρ_A g A
 //!   (reference 1, static equilibrium). Materials: SVK with E h = 500 N/m, D = 5e-6 N·m,
-//!   ρ_A = 0.15 kg/m², and the `cotton_broadcloth` and `light_cotton` presets.
+//!   ρ_A = 0.15 kg/m², and the `cotton_broadcloth` and `light_cotton` presets. The
+//!   `_sequenced` rows solve the same drop by mesh sequencing (`coarse_levels`, from 16²
+//!   up, `analysis_sequence`): their counts and times are summed over the levels, and
+//!   `rms_to_direct_m` compares their rest positions with the direct solve's on the same
+//!   mesh (the paths differ, and with friction so may the rest states).
 //! - Sagging plate: a 0.6 m square plate, t = 0.4 mm, E = 2e8 Pa, ν = 0.3, ρ_A = 0.12
 //!   kg/m², clamped on one edge, sagging under its weight in a Static step with the default
 //!   (automatic) increments; the value is the tip deflection at the middle of the free edge,
@@ -21,13 +25,14 @@ use serde::Serialize;
 
 use super::{series_by, solve_variant, write_records};
 
-/// Sheet-onto-sphere scene; `{N}`, `{MATERIAL}`, `{SECTION}` and `{LOAD}` are substituted.
+/// Sheet-onto-sphere scene; `{N}`, `{MATERIAL}`, `{SECTION}`, `{LOAD}` and `{DYNAMIC}` (the
+/// Dynamic step's settings, empty for the defaults) are substituted.
 const SHEET_ON_SPHERE: &str = r#"Scene(
     name: "sheet_on_sphere",
     materials: {"cloth": {MATERIAL}},
     parts: [(name: "sheet", mesh: Rectangle(lx: 0.8, ly: 0.8, nx: {N}, ny: {N}), material: "cloth", {SECTION})],
     loads: {"weight": {LOAD}},
-    steps: [(name: "fall", increments: 1, scale: {"weight": 1.0}, kind: Dynamic(()))],
+    steps: [(name: "fall", increments: 1, scale: {"weight": 1.0}, kind: Dynamic(({DYNAMIC})))],
     contact: Some((formulation: Barrier(),
         bodies: [
             (name: "ball", shape: Sphere(radius: 0.2), translation: (0.4, 0.4, -0.2503), friction: 0.4),
@@ -104,9 +109,18 @@ pub struct DriveRecord {
     pub rel_error: f64,
     /// "completed" or the failure diagnosis.
     pub status: String,
+    /// Mesh sequencing (`coarse_levels`): per level "mesh: time steps / Newton iterations",
+    /// the scene's mesh last; the counts and times above are then summed over the levels.
+    /// Empty for a direct solve.
+    pub levels: String,
+    /// RMS distance (m) between the rest positions of the nodes and those of the direct
+    /// solve on the same mesh (NaN when there is none to compare with).
+    pub rms_to_direct_m: f64,
 }
 
 /// Solves `template` with `{N}` = n and the other substitutions; the value from the summary.
+/// Returns the record and the rest positions of the nodes. A sequenced solve's counts and
+/// times are those of all its levels (`summary.sequence`).
 fn run_case(
     case: &str,
     n: usize,
@@ -114,7 +128,7 @@ fn run_case(
     replace: &[(&str, String)],
     reference: f64,
     value: impl Fn(&crate::results::Summary) -> Option<f64>,
-) -> DriveRecord {
+) -> (DriveRecord, Vec<[f64; 3]>) {
     let mut text = template.replace("{N}", &n.to_string());
     for (from, to) in replace {
         text = text.replace(from, to);
@@ -126,7 +140,7 @@ fn run_case(
     match outcome {
         Ok(s) => {
             let v = value(&s).unwrap_or(f64::NAN);
-            DriveRecord {
+            let mut r = DriveRecord {
                 case: case.into(),
                 mesh,
                 dofs: s.sizes.dofs,
@@ -140,26 +154,64 @@ fn run_case(
                 value: v,
                 reference,
                 rel_error: ((v - reference) / reference).abs(),
-                status: s.status,
+                status: s.status.clone(),
+                levels: String::new(),
+                rms_to_direct_m: f64::NAN,
+            };
+            if let Some(serde_json::Value::Array(levels)) = s.extra.get("sequence").map(|q| &q["levels"]) {
+                let count = |l: &serde_json::Value, k: &str| l[k].as_u64().unwrap_or(0) as usize;
+                let secs = |l: &serde_json::Value, k: &str| l[k].as_f64().unwrap_or(0.0);
+                let mut names = Vec::new();
+                for l in levels {
+                    r.steps += count(l, "time_steps");
+                    r.newton_iterations += count(l, "newton_iterations");
+                    r.line_search_cuts += count(l, "line_search_cuts");
+                    r.projected_iterations += count(l, "projected_iterations");
+                    r.assembly_s += secs(l, "assembly_s");
+                    r.factorization_s += secs(l, "factorization_s");
+                    names.push(format!("{}: {}/{}", l["mesh"].as_str().unwrap_or("?"), count(l, "time_steps"), count(l, "newton_iterations")));
+                }
+                names.push(format!("{n}x{n}: {}/{}", s.increments.len(), s.newton_iterations));
+                r.levels = names.join(", ");
             }
+            (r, s.final_positions)
         }
-        Err(e) => DriveRecord {
-            case: case.into(),
-            mesh,
-            dofs: 0,
-            steps: 0,
-            newton_iterations: 0,
-            line_search_cuts: 0,
-            projected_iterations: 0,
-            assembly_s: 0.0,
-            factorization_s: 0.0,
-            wall_s,
-            value: f64::NAN,
-            reference,
-            rel_error: f64::NAN,
-            status: e,
-        },
+        Err(e) => (
+            DriveRecord {
+                case: case.into(),
+                mesh,
+                dofs: 0,
+                steps: 0,
+                newton_iterations: 0,
+                line_search_cuts: 0,
+                projected_iterations: 0,
+                assembly_s: 0.0,
+                factorization_s: 0.0,
+                wall_s,
+                value: f64::NAN,
+                reference,
+                rel_error: f64::NAN,
+                status: e,
+                levels: String::new(),
+                rms_to_direct_m: f64::NAN,
+            },
+            Vec::new(),
+        ),
     }
+}
+
+/// RMS distance between two lists of node positions of the same mesh (NaN otherwise).
+pub fn rms_distance(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
+    if a.len() != b.len() || a.is_empty() {
+        return f64::NAN;
+    }
+    let sum: f64 = a.iter().zip(b).map(|(p, q)| (0..3).map(|k| (p[k] - q[k]).powi(2)).sum::<f64>()).sum();
+    (sum / a.len() as f64).sqrt()
+}
+
+/// Coarser meshes of the sequenced sheet drops: down to 16 elements per side.
+fn sequence_levels(n: usize) -> usize {
+    (n / 16).max(1).ilog2() as usize
 }
 
 /// Vertical contact resultant of the last increment over the weight of the sheet.
@@ -208,7 +260,11 @@ pub fn run_drive(json: &Path, quick: bool) -> Result<(), String> {
             r.wall_s,
             r.value,
             r.rel_error
-        )
+        );
+        if !r.levels.is_empty() {
+            let rms = if r.rms_to_direct_m.is_finite() { format!("; rest positions {:.2e} m RMS from the direct solve", r.rms_to_direct_m) } else { String::new() };
+            println!("{:<34} levels (time steps/Newton iterations) {}{rms}", "", r.levels);
+        }
     };
     for (name, material, section, load) in SHEETS {
         let meshes: &[usize] = match (name, quick) {
@@ -217,27 +273,41 @@ pub fn run_drive(json: &Path, quick: bool) -> Result<(), String> {
             (_, false) => &[32, 64],
             (_, true) => &[32],
         };
-        for &n in meshes {
+        // Mesh sequencing (`coarse_levels`, from 16² up) beside the direct drop.
+        let sequenced: &[usize] = match (name, quick) {
+            ("svk", false) => &[32, 64, 128],
+            ("svk", true) => &[32],
+            ("cotton_broadcloth", false) => &[64],
+            _ => &[],
+        };
+        let density = if name == "svk" {
+            Some(0.15)
+        } else {
+            crate::material::FabricProperties::preset(name).map(|p| p.areal_density)
+        };
+        let mut direct: Vec<(usize, Vec<[f64; 3]>)> = Vec::new();
+        for (&n, levels) in meshes.iter().map(|n| (n, 0)).chain(sequenced.iter().map(|n| (n, sequence_levels(*n)))) {
             let rep = [
                 ("{MATERIAL}", material.to_string()),
                 ("{SECTION}", section.to_string()),
                 ("{LOAD}", load.to_string()),
+                ("{DYNAMIC}", if levels > 0 { format!("coarse_levels: {levels}") } else { String::new() }),
             ];
-            let density = if name == "svk" {
-                Some(0.15)
-            } else {
-                crate::material::FabricProperties::preset(name).map(|p| p.areal_density)
-            };
-            let case = format!("sheet_on_sphere_{name}");
-            let r = run_case(&case, n, SHEET_ON_SPHERE, &rep, 1.0, |s| {
+            let case = if levels > 0 { format!("sheet_on_sphere_{name}_sequenced") } else { format!("sheet_on_sphere_{name}") };
+            let (mut r, positions) = run_case(&case, n, SHEET_ON_SPHERE, &rep, 1.0, |s| {
                 resultant_over_weight(s, density? * 0.64 * 9.81)
             });
+            if levels == 0 {
+                direct.push((n, positions));
+            } else if let Some((_, d)) = direct.iter().find(|d| d.0 == n) {
+                r.rms_to_direct_m = rms_distance(d, &positions);
+            }
             print(&r);
             recs.push(r);
         }
     }
     for &n in if quick { &[20][..] } else { &[20, 50, 100][..] } {
-        let r = run_case(
+        let (r, _) = run_case(
             "sagging_plate_tip_uz",
             n,
             SAGGING_PLATE,

@@ -549,6 +549,15 @@ impl NodalForces for BarrierContact {
         s
     }
 
+    /// The start's positions become the committed ones (no friction history yet), so that
+    /// the first anchors are where the nodes start, not at the reference positions.
+    fn start_from(&mut self, model: &Model, state: &State) {
+        for (i, &a) in self.nodes.iter().enumerate() {
+            self.committed_x[i] = model.x0[a] + state.u[a];
+        }
+        self.history.iter_mut().for_each(|h| *h = PairHistory::default());
+    }
+
     fn commit(&mut self, model: &Model, state: &State) -> Option<serde_json::Value> {
         let t = Instant::now();
         let out = self.evaluate(model, state, false);

@@ -4,6 +4,8 @@
 //! taken in the node's current director frame. Fixed and prescribed DOFs are removed from
 //! the equation system; the rest are numbered 0..n_free.
 
+pub mod prolong;
+
 use nalgebra::Vector3;
 
 use crate::element::{DirectorFrame, Section, ShellElement, NODE_DOFS};

@@ -5,6 +5,7 @@ mod fabric_spec;
 mod names;
 mod path;
 pub mod protocol;
+pub mod sequence;
 mod spec;
 mod steps;
 

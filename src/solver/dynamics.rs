@@ -65,6 +65,9 @@ use crate::model::{State, FIXED, UNTIED};
 /// contact constraint limit, `contact::mechanics`).
 const MAX_SADDLE_ESCAPES: usize = 10;
 
+/// Most coarser meshes of a sequenced step (`DynamicSettings::coarse_levels`).
+pub const MAX_COARSE_LEVELS: usize = 8;
+
 /// Successive time-step failures at the same element after which a Dynamic step stops with a
 /// diagnosis instead of cutting Δt further (each cut quarters it).
 const FAILURE_STREAK: usize = 6;
@@ -129,6 +132,13 @@ pub struct DynamicSettings {
     /// update). Terms without a potential (friction other than the barrier's lagged one)
     /// fall back to the safeguarded update.
     pub incremental_potential: Option<bool>,
+    /// Mesh sequencing (nested iteration) of a step to rest: solve it first to rest on the
+    /// parts' grids coarsened `coarse_levels` times by 2 (elements per side halved, rounded
+    /// up), map each rest state onto the next finer grid and continue there, the scene's
+    /// own mesh last (`analysis_sequence`: mapped nodes pushed out of the bodies, directors
+    /// relaxed with the mid-surface held, then the step goes on from rest). 0 (default):
+    /// off. Only for the first step of a scene whose parts are all `Rectangle` grids.
+    pub coarse_levels: usize,
 }
 
 impl Default for DynamicSettings {
@@ -150,6 +160,7 @@ impl Default for DynamicSettings {
             scheme: TimeScheme::BackwardEuler,
             duration: 0.0,
             incremental_potential: None,
+            coarse_levels: 0,
         }
     }
 }
@@ -185,6 +196,10 @@ pub fn check_settings(ds: &DynamicSettings) -> Option<(&'static str, &'static st
         Some(("scheme", "expected a spectral radius rho_inf in [0, 1]"))
     } else if !(ds.duration.is_finite() && ds.duration >= 0.0) {
         Some(("duration", "expected a non-negative duration (0: run to rest)"))
+    } else if ds.coarse_levels > MAX_COARSE_LEVELS {
+        Some(("coarse_levels", "expected at most 8 coarser meshes (each halves the elements per side)"))
+    } else if ds.coarse_levels > 0 && (ds.duration > 0.0 || !matches!(ds.scheme, TimeScheme::BackwardEuler)) {
+        Some(("coarse_levels", "mesh sequencing is for backward-Euler steps to rest (duration 0): a transient path cannot be mapped between meshes"))
     } else {
         None
     }
@@ -573,7 +588,10 @@ impl<'m> Solver<'m> {
         if let Some((key, msg)) = check_settings(ds) {
             return Err(error(0, vec![], None, format!("invalid Dynamic setting {key}: {msg}"), 0.0));
         }
-        let free_mass = model.dofs.eq.iter().enumerate().any(|(g, &e)| e != FIXED && g % NODE_DOFS < 3 && mass.translational[g / NODE_DOFS] > 0.0);
+        let free_mass = model.dofs.eq.iter().enumerate().any(|(g, &e)| {
+            let m = if g % NODE_DOFS < 3 { mass.translational[g / NODE_DOFS] } else { mass.rotary[g / NODE_DOFS] };
+            e != FIXED && m > 0.0
+        });
         if !free_mass {
             return Err(error(
                 0,

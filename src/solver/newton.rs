@@ -249,6 +249,15 @@ impl<'m> Solver<'m> {
         }
     }
 
+    /// Tells the nodal-force terms that the solve starts from `state`, not the reference
+    /// state ([`super::nodal::NodalForces::start_from`]).
+    pub fn start_nodal_forces_from(&mut self, state: &State) {
+        self.nodal_cache.forget();
+        for c in self.nodal_forces.iter_mut() {
+            c.start_from(self.model, state);
+        }
+    }
+
     /// Equations, stored tangent entries (upper triangle) and factor entries.
     pub fn sizes(&self) -> (usize, usize, usize) {
         (self.assembler.pattern.n, self.assembler.nnz(), self.cholesky.factor_nnz())

@@ -36,6 +36,13 @@ pub trait NodalForces: Send {
     fn motion_end(&self) -> f64 {
         f64::NEG_INFINITY
     }
+    /// Called once before the solve when it starts from `state` instead of the reference
+    /// state (a state mapped from a coarser mesh, `analysis_sequence`): the term takes
+    /// `state` as its last converged state (e.g. friction anchors start there). Default:
+    /// nothing.
+    fn start_from(&mut self, model: &Model, state: &State) {
+        let _ = (model, state);
+    }
     /// Called once per converged (sub-)increment or time step with the converged state, so
     /// the term can update its history; returns a report for the increment, if any.
     fn commit(&mut self, model: &Model, state: &State) -> Option<serde_json::Value> {

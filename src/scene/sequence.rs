@@ -1,0 +1,104 @@
+//! Mesh sequencing of a scene's first step (`Dynamic((coarse_levels: L))`): which scenes
+//! admit it, and the coarser scenes it solves first (`analysis_sequence` runs them).
+
+use super::spec::{MeshSpec, Scene};
+use crate::input::{Locator, SceneError};
+use crate::solver::StepKind;
+
+/// Coarser meshes requested by the scene's first step (0: not sequenced).
+pub fn coarse_levels(scene: &Scene) -> usize {
+    match scene.steps.first().map(|s| &s.kind) {
+        Some(StepKind::Dynamic(ds)) => ds.coarse_levels,
+        _ => 0,
+    }
+}
+
+/// Elements per side of a grid of `n` elements coarsened `level` times by 2 (rounded up).
+pub fn coarse_count(n: usize, level: usize) -> usize {
+    n.div_ceil(1usize << level.min(usize::BITS as usize - 1))
+}
+
+/// Refuses `coarse_levels` where the mapping between meshes is not defined: on any step but
+/// the first, or when a part is not a `Rectangle` grid (the prolongation is the structured
+/// grid's, `model::prolong`), the coarsest grid would have fewer than 2 elements per side,
+/// or the scene has seams, a garment, an imperfection, a movement protocol moving bodies or
+/// augmented-Lagrangian contact (states, placements or multipliers not carried over).
+pub(super) fn check(scene: &Scene, loc: &Locator) -> Result<(), SceneError> {
+    for (k, s) in scene.steps.iter().enumerate() {
+        let StepKind::Dynamic(ds) = &s.kind else { continue };
+        if ds.coarse_levels == 0 {
+            continue;
+        }
+        let field = format!("steps[{}].kind.coarse_levels", s.name);
+        let bad = |msg: String| Err(loc.at(Some(&s.name), Some("coarse_levels"), field.clone(), msg));
+        if k > 0 {
+            return bad("mesh sequencing starts from the scene's initial state: only the first step may have coarse_levels".into());
+        }
+        let other = if scene.garment.is_some() {
+            Some("a garment")
+        } else if !scene.seams.is_empty() {
+            Some("seams")
+        } else if scene.imperfection.is_some() {
+            Some("an imperfection")
+        } else if scene.protocol.is_some() {
+            Some("a movement protocol")
+        } else if scene.contact.as_ref().is_some_and(|c| c.bodies.iter().any(|b| !b.motion.is_empty())) {
+            Some("a moving contact body")
+        } else if scene.contact.as_ref().is_some_and(|c| matches!(c.formulation, crate::contact::spec::ContactFormulation::AugmentedLagrangian)) {
+            Some("augmented-Lagrangian contact (its multipliers are not mapped; use formulation: Barrier())")
+        } else {
+            None
+        };
+        if let Some(what) = other {
+            return bad(format!("mesh sequencing maps generated Rectangle parts only; this scene has {what}"));
+        }
+        for p in &scene.parts {
+            match p.mesh {
+                MeshSpec::Rectangle { nx, ny, .. } => {
+                    if coarse_count(nx, ds.coarse_levels) < 2 || coarse_count(ny, ds.coarse_levels) < 2 {
+                        return bad(format!(
+                            "part {}: {nx} × {ny} elements coarsened {} times by 2 leaves fewer than 2 elements per side; use fewer levels",
+                            p.name, ds.coarse_levels
+                        ));
+                    }
+                }
+                _ => return bad(format!("part {}: mesh sequencing maps Rectangle grids only", p.name)),
+            }
+        }
+    }
+    if let Some(p) = &scene.protocol
+        && p.settle.coarse_levels > 0
+    {
+        return Err(loc.at(None, Some("coarse_levels"), "protocol.settle.coarse_levels", "pose steps continue from the previous pose: they cannot be sequenced"));
+    }
+    Ok(())
+}
+
+/// The scene solved at sequencing level `level` (1 = one halving): every `Rectangle` part
+/// with its elements per side halved `level` times (rounded up), only the first step, with
+/// `coarse_levels` 0, no VTU output.
+pub fn coarsened(scene: &Scene, level: usize) -> Scene {
+    let mut s = scene.clone();
+    for p in &mut s.parts {
+        if let MeshSpec::Rectangle { nx, ny, .. } = &mut p.mesh {
+            *nx = coarse_count(*nx, level);
+            *ny = coarse_count(*ny, level);
+        }
+    }
+    s.steps.truncate(1);
+    for st in &mut s.steps {
+        if let StepKind::Dynamic(ds) = &mut st.kind {
+            ds.coarse_levels = 0;
+        }
+    }
+    s.output.vtu = false;
+    s
+}
+
+/// (elements along x, along y) of each `Rectangle` part of `scene` (None for other parts).
+pub fn grids(scene: &Scene) -> Vec<Option<(usize, usize)>> {
+    scene.parts.iter().map(|p| match p.mesh {
+        MeshSpec::Rectangle { nx, ny, .. } => Some((nx, ny)),
+        _ => None,
+    }).collect()
+}
