@@ -341,6 +341,8 @@ impl<'m> Solver<'m> {
         let incremental_potential = self.incremental_potential(ds);
         let to_rest = incremental_potential && ds.duration == 0.0;
         let mut last_correction = f64::INFINITY;
+        // An iteration of this time step needed the contact pairs' Hessians projected.
+        let mut project_contact = false;
         // The lowest relative residual of the step so far, and (kept only once it is within
         // INEXACT_BEST, the only case `accept_best` uses it) that iterate: (residual, state,
         // strain energy, static residual, static residual vector).
@@ -419,27 +421,24 @@ impl<'m> Solver<'m> {
             };
             self.timings.factorization += t.elapsed().as_secs_f64();
             if descent && !matches!(kind, Ok(FactorKind::Llt)) {
-                // Indefinite: project the element Hessians for this iteration's direction.
-                self.assembler.project = true;
-                if let Err(f) = self.assemble(state, scales, true) {
-                    self.assembler.project = false;
-                    return TimeStep::Failed { iteration: it, residuals, worst_element: Some(f.element), cause: f.to_string() };
-                }
-                self.residual(&mut r);
-                self.add_inertia(state, prev, mass, &co, &mut r);
-                let t = Instant::now();
-                kind = if self.cholesky.factorize_definite(&self.values) { Ok(FactorKind::Llt) } else { Ok(FactorKind::Ldlt) };
-                self.timings.factorization += t.elapsed().as_secs_f64();
-                if !matches!(kind, Ok(FactorKind::Llt)) {
-                    // Still indefinite: the rest comes from terms outside the elements that
-                    // keep their exact Hessian (surface contact pairs): project theirs too.
-                    // (The evaluation kept for this state has the exact blocks: evaluate anew,
-                    // and do not keep the projected one.)
-                    self.nodal_cache.forget();
-                    self.nodal_forces.iter_mut().for_each(|c| c.project_hessians(true));
+                // Indefinite: project the element Hessians for this iteration's direction; if
+                // that is still indefinite, the rest comes from terms outside the elements that
+                // keep their exact Hessian (surface contact pairs): project theirs too — at
+                // once in the later iterations of a time step that needed it. (The nodal
+                // evaluation kept for this state has the exact blocks: it is evaluated anew,
+                // and the projected one is not kept.)
+                let mut contact = project_contact;
+                loop {
+                    self.assembler.project = true;
+                    if contact {
+                        self.nodal_cache.forget();
+                        self.nodal_forces.iter_mut().for_each(|c| c.project_hessians(true));
+                    }
                     let assembled = self.assemble(state, scales, true);
-                    self.nodal_forces.iter_mut().for_each(|c| c.project_hessians(false));
-                    self.nodal_cache.forget();
+                    if contact {
+                        self.nodal_forces.iter_mut().for_each(|c| c.project_hessians(false));
+                        self.nodal_cache.forget();
+                    }
                     if let Err(f) = assembled {
                         self.assembler.project = false;
                         return TimeStep::Failed { iteration: it, residuals, worst_element: Some(f.element), cause: f.to_string() };
@@ -447,8 +446,19 @@ impl<'m> Solver<'m> {
                     self.residual(&mut r);
                     self.add_inertia(state, prev, mass, &co, &mut r);
                     let t = Instant::now();
-                    kind = self.cholesky.factorize(&self.values);
+                    kind = if contact {
+                        self.cholesky.factorize(&self.values)
+                    } else if self.cholesky.factorize_definite(&self.values) {
+                        Ok(FactorKind::Llt)
+                    } else {
+                        Ok(FactorKind::Ldlt)
+                    };
                     self.timings.factorization += t.elapsed().as_secs_f64();
+                    if contact || matches!(kind, Ok(FactorKind::Llt)) {
+                        break;
+                    }
+                    contact = true;
+                    project_contact = true;
                 }
             }
             if self.assembler.project {
