@@ -32,7 +32,10 @@
 //! that placement. The body's own displacement over the attempt is seen by conservative
 //! advancement on the relative motion (node still, body interpolated from its committed to
 //! its trial placement): nodes it would sweep over, and nodes in the barrier zone, start the
-//! iteration carried rigidly with the body, so the initial iterate is intersection-free;
+//! iteration carried rigidly with the body — seam nodes too, a tied slave by carrying its
+//! masters (left behind, a seam node on a limb that moves into it was overtaken by the body
+//! within a fraction of d̂ per time step, which held Δt of the NBC suit's arm raise at
+//! ~4·10⁻⁴ s) —, so the initial iterate is intersection-free;
 //! Newton's own collision bound then works with the body at rest at its trial placement.
 //! Friction anchors and lagged normals are stored in the body frame, so the slip is measured
 //! relative to the body's surface and a moving body carries the cloth by friction.
@@ -207,7 +210,8 @@ pub struct BarrierContact {
     /// Body placements at the last converged state (`bodies[b].pose` is the trial one).
     committed_pose: Vec<Isometry3<f64>>,
     /// Per participating node: whether it may be carried by a moving body in the initial
-    /// iterate (all three translations free equations and not a tie master).
+    /// iterate (each translation a free equation or the slave of a tie on translations, so
+    /// a seam node rides along like any other; a prescribed or fixed node does not).
     carriable: Vec<bool>,
     /// Analysis time of the trial placement.
     time: f64,
@@ -270,14 +274,7 @@ impl BarrierContact {
             })
             .collect();
         let np = nodes.len() * bodies.len();
-        let mut master = vec![false; n];
-        for tie in &model.dofs.ties {
-            for &(g, _) in &tie.masters {
-                master[g / NODE_DOFS] = true;
-            }
-        }
-        let carriable =
-            nodes.iter().map(|&a| !master[a] && (0..3).all(|k| model.dofs.eq[NODE_DOFS * a + k] != crate::model::FIXED)).collect();
+        let carriable = nodes.iter().map(|&a| (0..3).all(|k| model.dofs.eq[NODE_DOFS * a + k] != crate::model::FIXED || translation_slave(model, NODE_DOFS * a + k))).collect();
         Self {
             committed_pose: bodies.iter().map(|b| b.pose).collect(),
             carriable,
@@ -446,7 +443,9 @@ impl NodalForces for BarrierContact {
     /// relative motion, [`motion::relative_rate`]) or that lies in the barrier zone (it
     /// rides along, like cloth on a lifting hand). A carried node keeps its body-frame
     /// coordinates, hence its gap; its director frame turns with the body when its
-    /// rotations are free. A node that the carry would put into another body stays.
+    /// rotations are free. A node that the carry would put into another body stays. A tied
+    /// slave (a seam node) is carried through its masters, which the carry moves with it
+    /// (`Model::apply_prescribed` then places the slave from them).
     /// Newton then minimises with the bodies at their trial placement; its own collision
     /// bound ([`NodalForces::max_step`]) sees them still.
     fn begin_motion(&mut self, model: &Model, _from: f64, to: f64, state: &mut State) {
@@ -493,9 +492,44 @@ impl NodalForces for BarrierContact {
                 None
             })
             .collect();
-        for (i, c) in carry.into_iter().enumerate() {
-            let Some((_, m)) = c else { continue };
+        // A tied slave (a seam node) follows its masters (`Model::apply_prescribed` places it
+        // before the iteration): it is carried by carrying its masters with it, each master
+        // once (by its own body if it is itself in a barrier zone) and only where the carry
+        // puts it into no other body.
+        let nn = model.n_nodes();
+        let mut moves: Vec<Option<(usize, Isometry3<f64>)>> = vec![None; nn];
+        for (i, c) in carry.iter().enumerate() {
+            if let Some((b, m)) = c {
+                moves[self.nodes[i]] = Some((*b, *m));
+            }
+        }
+        for (i, c) in carry.iter().enumerate() {
+            let Some((b, m)) = c else { continue };
             let a = self.nodes[i];
+            for k in 0..3 {
+                let t = model.dofs.tie_of[NODE_DOFS * a + k];
+                if t == crate::model::UNTIED {
+                    continue;
+                }
+                for &(g, _) in &model.dofs.ties[t as usize].masters {
+                    let mn = g / NODE_DOFS;
+                    if moves[mn].is_some() || !(0..3).all(|j| model.dofs.eq[NODE_DOFS * mn + j] != crate::model::FIXED) {
+                        continue;
+                    }
+                    let y = m.transform_point(&(model.x0[mn] + state.u[mn]).into()).coords;
+                    let r = self.offset.get(i).copied().unwrap_or(0.0);
+                    if self.bodies.iter().enumerate().all(|(c, o)| c == *b || o.proximity(&y, r).is_none_or(|q| q.distance - r > 0.0)) {
+                        moves[mn] = Some((*b, *m));
+                    }
+                }
+            }
+        }
+        for (a, mv) in moves.into_iter().enumerate() {
+            let Some((_, m)) = mv else { continue };
+            if (0..3).any(|k| model.dofs.eq[NODE_DOFS * a + k] == crate::model::FIXED) {
+                // A tied slave: placed from its (carried) masters.
+                continue;
+            }
             let x = model.x0[a] + state.u[a];
             state.u[a] = m.transform_point(&x.into()).coords - model.x0[a];
             if (3..5).all(|k| model.dofs.eq[NODE_DOFS * a + k] != crate::model::FIXED) {
@@ -676,6 +710,13 @@ impl NodalForces for BarrierContact {
             }),
         ))
     }
+}
+
+/// Whether global DOF `g` is the slave of a tie whose masters are all translations (its
+/// value follows them in `Model::apply_prescribed`, so carrying them carries it).
+fn translation_slave(model: &Model, g: usize) -> bool {
+    let t = model.dofs.tie_of[g];
+    t != crate::model::UNTIED && model.dofs.ties[t as usize].masters.iter().all(|&(m, _)| m % NODE_DOFS < 3)
 }
 
 #[cfg(test)]
