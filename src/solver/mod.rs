@@ -17,6 +17,7 @@ pub mod nodal;
 mod report;
 mod reuse;
 mod saddle;
+mod time_step;
 
 pub use chord::ChordSettings;
 pub use dynamics::{DynamicInfo, DynamicSettings, LumpedMass, TimeScheme};
