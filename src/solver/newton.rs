@@ -147,9 +147,6 @@ pub struct Solver<'m> {
     pub(super) block_slots: super::nodal::BlockSlots,
     /// The nodal-force terms' last evaluation, for an assembly of the same state (`reuse`).
     pub(super) nodal_cache: super::reuse::NodalCache,
-    /// A projected iteration of a time step needed the contact pairs' Hessians projected too
-    /// (`time_step`): later projected iterations project them at once.
-    pub(super) project_contact: bool,
     /// Sum of the nodal-force terms' potentials at the last assembly (None: a term is not
     /// conservative).
     pub(super) nodal_potential: Option<f64>,
@@ -188,7 +185,6 @@ impl<'m> Solver<'m> {
             couplings: Vec::new(),
             block_slots: Default::default(),
             nodal_cache: Default::default(),
-            project_contact: false,
             nodal_potential: Some(0.0),
             clock: 0.0,
             clock_trial: 0.0,

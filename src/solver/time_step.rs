@@ -158,6 +158,8 @@ impl<'m> Solver<'m> {
         let incremental_potential = self.incremental_potential(ds);
         let to_rest = incremental_potential && ds.duration == 0.0;
         let mut last_correction = f64::INFINITY;
+        // An iteration of this time step needed the contact pairs' Hessians projected.
+        let mut project_contact = false;
         // The lowest relative residual of the step so far, and (kept only once it is within
         // INEXACT_BEST, the only case `accept_best` uses it) that iterate: (residual, state,
         // strain energy, static residual, static residual vector).
@@ -239,11 +241,10 @@ impl<'m> Solver<'m> {
                 // Indefinite: project the element Hessians for this iteration's direction; if
                 // that is still indefinite, the rest comes from terms outside the elements that
                 // keep their exact Hessian (surface contact pairs): project theirs too — at
-                // once after a projected iteration of this solve has needed it (a contact
-                // state that makes the tangent indefinite persists over time steps). (The nodal
+                // once in the later iterations of a time step that needed it. (The nodal
                 // evaluation kept for this state has the exact blocks: it is evaluated anew,
                 // and the projected one is not kept.)
-                let mut contact = self.project_contact;
+                let mut contact = project_contact;
                 loop {
                     self.assembler.project = true;
                     if contact {
@@ -274,8 +275,8 @@ impl<'m> Solver<'m> {
                         break;
                     }
                     contact = true;
+                    project_contact = true;
                 }
-                self.project_contact = contact;
             }
             if self.assembler.project {
                 self.timings.projected_iterations += 1;
