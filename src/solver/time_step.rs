@@ -263,13 +263,9 @@ impl<'m> Solver<'m> {
                     self.residual(&mut r);
                     self.add_inertia(state, prev, mass, &co, &mut r);
                     let t = Instant::now();
-                    kind = if contact {
-                        self.cholesky.factorize(&self.values)
-                    } else if self.cholesky.factorize_definite(&self.values) {
-                        Ok(FactorKind::Llt)
-                    } else {
-                        Ok(FactorKind::Ldlt)
-                    };
+                    // Only whether it is positive definite matters (an indefinite one ends
+                    // the time step), so no LDLᵀ fallback.
+                    kind = if self.cholesky.factorize_definite(&self.values) { Ok(FactorKind::Llt) } else { Ok(FactorKind::Ldlt) };
                     self.timings.factorization += t.elapsed().as_secs_f64();
                     if contact || matches!(kind, Ok(FactorKind::Llt)) {
                         break;
