@@ -39,5 +39,6 @@ pub mod contact;
 pub mod garment;
 pub mod pattern;
 pub mod budget;
+pub mod sizing;
 pub mod fuzz;
 pub mod mannequin;

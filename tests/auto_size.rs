@@ -199,3 +199,127 @@ fn auto_mesh_of_a_peirce_cantilever_matches_the_fine_mesh_with_fewer_dofs() {
     assert!(err < tol, "tip error {err} of L");
     assert!(4 * n_auto < n_fine, "{n_auto} vs {n_fine} DOFs");
 }
+
+/// The shipped Cusick scene (`garments/drape/cusick.ron`) with polyester faille (B = 1.5e-6
+/// N·m in its weaker direction, ρ_A = 0.15 kg/m², h = 0.3 mm) and its specimen meshed by
+/// `mesh` (RON text of a mesh spec).
+fn cusick_with(mesh: &str) -> String {
+    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/garments/drape/cusick.ron")).expect("scene");
+    text.replace("preset: Some(\"cotton_broadcloth\")", "preset: Some(\"polyester_faille\")")
+        .replace("FocusedAnnulus(ri: 0.02, ro: 0.15, ntheta: 48, focus: 0.09, refine: 8.0, inner_aspect: 4.0)", mesh)
+        .replace("output: (every: 50)", "output: (vtu: false)")
+}
+
+/// Ring radii and sectors of a built annulus (nodes on rings of equal radius).
+fn rings_of(text: &str) -> (Vec<f64>, usize) {
+    let sc = scene::parse("cusick.ron", text).unwrap_or_else(|e| panic!("{e}"));
+    let built = scene::build(&sc, "cusick.ron", text).unwrap_or_else(|e| panic!("{e}"));
+    let mut r: Vec<f64> = built.model.x0.iter().map(|x| x.xy().norm()).collect();
+    r.sort_by(f64::total_cmp);
+    r.dedup_by(|a, b| (*a - *b).abs() < 1e-9);
+    (r.clone(), built.model.x0.len() / r.len())
+}
+
+/// `SizedAnnulus` with `Auto` on the Cusick specimen (`scene::sizing`), against the formulas
+/// by hand: the sectors make the circumferential width at the disc's edge r_e (90 mm; the
+/// probe finds the edge where the rounded rim leaves the specimen's thickness, 89–91 mm)
+/// √(8T) λ/2π, λ the Cerda–Mahadevan wavelength of the overhang L = ro − r_e under the edge
+/// tension ρ_A g L; the finest ring step, at the rim, is √(8T) ℓ_T with ℓ_T = √(B/(ρ_A g L))
+/// (4.1 mm, larger than the 1 mm rim radius) to the ring equidistribution's rounding (10 %);
+/// the outer overhang's rings are √(8T) ℓ_b apart (10 %); the 25 % grading and the 4:1
+/// aspect bound hold everywhere. A fixed size h gives rings ≤ h apart and sectors ≤ h wide at ro.
+#[test]
+fn sized_annulus_follows_the_fold_wavelength_and_the_rim() {
+    let (t, b, rho, ro): (f64, f64, f64, f64) = (0.02, 1.5e-6, 0.15, 0.15);
+    let s = (8.0 * t).sqrt();
+    let (r, ntheta) = rings_of(&cusick_with(&format!("SizedAnnulus(ri: 0.02, ro: {ro}, element_size: Auto((tolerance: {t})))")));
+    let sectors = |re: f64| {
+        let l = ro - re;
+        let lam = plyshell::sizing::wrinkle_wavelength(b, rho * G * l, l);
+        (std::f64::consts::TAU * re / (s * lam / std::f64::consts::TAU)).ceil() as usize
+    };
+    let lb = bending_length(b, rho);
+    let lt = plyshell::sizing::tension_length(b, rho * G * (ro - 0.09));
+    let steps: Vec<f64> = r.windows(2).map(|w| w[1] - w[0]).collect();
+    let min = steps.iter().copied().fold(f64::INFINITY, f64::min);
+    let outer = steps[steps.len() - 1];
+    println!(
+        "Auto T = {t}: {ntheta} sectors × {} rings ({} nodes); ℓ_b = {:.2} mm, ℓ_T = {:.2} mm; rim step {:.3} mm, outer {:.3} mm",
+        r.len(),
+        r.len() * ntheta,
+        1e3 * lb,
+        1e3 * lt,
+        1e3 * min,
+        1e3 * outer
+    );
+    assert!((sectors(0.089)..=sectors(0.091)).contains(&ntheta), "{ntheta} sectors, by hand {}..{}", sectors(0.089), sectors(0.091));
+    assert!((min / (s * lt) - 1.0).abs() < 0.1, "rim step {min} vs {}", s * lt);
+    assert!((outer / (s * lb) - 1.0).abs() < 0.1, "outer step {outer} vs {}", s * lb);
+    let w = std::f64::consts::TAU / ntheta as f64;
+    for (k, d) in steps.iter().enumerate() {
+        assert!(*d <= 4.0 * w * r[k + 1] * 1.01, "ring {k}: {d} over 4 widths");
+        if k > 0 {
+            let q = d / steps[k - 1];
+            assert!(q < 1.3 && q > 1.0 / 1.3, "ring {k}: steps {} → {d}", steps[k - 1]);
+        }
+    }
+    let (r, ntheta) = rings_of(&cusick_with("SizedAnnulus(ri: 0.02, ro: 0.15, element_size: 0.005)"));
+    assert_eq!(ntheta, (std::f64::consts::TAU * 0.15 / 0.005).ceil() as usize);
+    assert_eq!(r.len(), 27);
+    assert!(r.windows(2).all(|w| w[1] - w[0] <= 0.005 * (1.0 + 1e-9)));
+}
+
+/// Bad `SizedAnnulus` values are located errors naming the field and the line.
+#[test]
+fn bad_sized_annulus_values_are_located_errors() {
+    for (mesh, field, words) in [
+        ("SizedAnnulus(ri: 0.02, ro: 0.01, element_size: Auto((tolerance: 0.02)))", "parts[specimen].mesh.ro", "greater than ri"),
+        ("SizedAnnulus(ri: -0.02, ro: 0.15, element_size: Auto((tolerance: 0.02)))", "parts[specimen].mesh.ri", "positive inner radius"),
+        ("SizedAnnulus(ri: 0.02, ro: 0.15, element_size: Auto((tolerance: 0.9)))", "parts[specimen].mesh.element_size.tolerance", "between 0 and 0.5"),
+        ("SizedAnnulus(ri: 0.02, ro: 0.15, element_size: Auto((tolerance: 0.02, tension: Some(0.0))))", "parts[specimen].mesh.element_size.tension", "positive tension"),
+        ("SizedAnnulus(ri: 0.02, ro: 0.15, element_size: -0.005)", "parts[specimen].mesh.element_size", "positive element size"),
+    ] {
+        let text = cusick_with(mesh);
+        let sc = scene::parse("cusick.ron", &text).unwrap_or_else(|e| panic!("{e}"));
+        let e = scene::build(&sc, "cusick.ron", &text).err().unwrap_or_else(|| panic!("{mesh} accepted"));
+        println!("{e}");
+        assert_eq!(e.field, field, "{e}");
+        assert!(e.message.contains(words), "{e}");
+        assert_eq!(e.line, 18, "{e}");
+    }
+    // A misspelt parameter is a parse error at its line.
+    let text = cusick_with("SizedAnnulus(ri: 0.02, ro: 0.15, element_size: Auto((tolerence: 0.02)))");
+    let e = scene::parse("cusick.ron", &text).err().expect("refused");
+    assert_eq!(e.line, 18, "{e}");
+    assert!(e.to_string().contains("tolerence"), "{e}");
+}
+
+/// `SizedRectangle` with `Auto` (`scene::sizing::sized_rectangle`): the shipped cotton sheet
+/// over a sphere (`garments/drape/sphere.ron`; B = 0.9e-5 N·m in its weaker direction, ρ_A =
+/// 0.12 kg/m²) gets the garment panels' size √(8T) min(ℓ_b, λ/2π, R_body): on the 80 mm
+/// sphere the bending length ℓ_b = 19.7 mm governs, (⌈0.3 / h⌉)² elements; on a 10 mm sphere
+/// the body's radius does: that of the offset sphere through the probe point nearest the top,
+/// between 10.15 mm (the sheet lies 0.15 mm above the sphere) and √(10.15² + d²) mm, d ≤ 5.6 mm
+/// the half diagonal of the probe grid (the ℓ_b-sized grid, 7.9 mm).
+#[test]
+fn sized_rectangle_takes_the_panel_size() {
+    let t: f64 = 0.02;
+    let s = (8.0 * t).sqrt();
+    let lb = bending_length(0.9e-5, 0.12);
+    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/garments/drape/sphere.ron")).expect("scene");
+    let text = text.replace("Rectangle(lx: 0.3, ly: 0.3, nx: 16, ny: 16)", &format!("SizedRectangle(lx: 0.3, ly: 0.3, element_size: Auto((tolerance: {t})))"));
+    for (radius, l_lo, l_hi) in [(0.08, lb, lb), (0.01, 0.01015, 0.01015f64.hypot(0.3 / (0.3 / (s * lb)).ceil() / 2f64.sqrt()))] {
+        let text = text.replace("Sphere(radius: 0.08), translation: (0.15, 0.15, -0.08015)", &format!("Sphere(radius: {radius}), translation: (0.15, 0.15, {})", -radius - 0.00015));
+        let sc = scene::parse("sphere.ron", &text).unwrap_or_else(|e| panic!("{e}"));
+        let built = scene::build(&sc, "sphere.ron", &text).unwrap_or_else(|e| panic!("{e}"));
+        let (lo, hi) = ((0.3 / (s * l_hi)).ceil() as usize, (0.3 / (s * l_lo)).ceil() as usize);
+        println!("sphere {radius} m: {} elements, by hand {lo}² to {hi}²", built.model.elements.len());
+        assert!((lo..=hi).any(|n| built.model.elements.len() == n * n), "{} elements", built.model.elements.len());
+    }
+    let text = text.replace("Auto((tolerance: 0.02))", "Auto((tolerance: 0.02, tension: Some(-1.0)))");
+    let sc = scene::parse("sphere.ron", &text).unwrap_or_else(|e| panic!("{e}"));
+    let e = scene::build(&sc, "sphere.ron", &text).err().expect("refused");
+    println!("{e}");
+    assert_eq!(e.field, "parts[cloth].mesh.element_size.tension", "{e}");
+    assert_eq!(e.line, 9, "{e}");
+}

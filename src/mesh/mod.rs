@@ -19,7 +19,7 @@ pub mod obj;
 pub mod select;
 pub mod spacing;
 
-pub use annulus::{annulus, annulus_rings, focused_rings, slit_annulus};
+pub use annulus::{annulus, annulus_rings, focused_rings, sized_rings, slit_annulus};
 pub use generate::{cylindrical_panel, cylindrical_panel_spaced, hemisphere, hemisphere_spaced, rectangle, twisted_strip};
 pub use spacing::Spacing;
 pub use obj::{from_obj, read_obj};

@@ -153,8 +153,13 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
         }
         // Materials with a through-thickness law (fabric) fix their own rule.
         let thickness_points = material.thickness_points().unwrap_or(p.thickness_points);
+        // The part's own areal density, else a Gravity load's, else its material's (a fabric's).
+        let areal_density = if p.areal_density > 0.0 { Some(p.areal_density) } else { gravity_density(&p.name).or(material.areal_density()) };
+        // A sized mesh (`SizedAnnulus`) becomes the generator it resolves to.
+        let sized = super::sizing::resolve_part_mesh(p, scene, &loc, base_dir, &parts, material.as_ref(), areal_density)?;
+        let mesh_spec = sized.as_ref().unwrap_or(&p.mesh);
         // The resource budget, before the mesh is allocated: this part and those before it.
-        let (counts, keys) = mesh_counts(&p.mesh);
+        let (counts, keys) = mesh_counts(mesh_spec);
         let fits = counts
             .and_then(|(n, e)| Some((planned.0.checked_add(n)?, planned.1.checked_add(e)?)))
             .ok_or_else(|| "more nodes than can be numbered".to_string())
@@ -167,7 +172,7 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
                 return Err(loc.at(Some(&p.name), Some(key), format!("{field}.{key}"), format!("expected finite numbers, found {v:?}")));
             }
         }
-        let mut m = make_mesh(&p.mesh, base_dir).map_err(|e| loc.at(Some(&p.name), Some("mesh"), format!("{field}.mesh"), e.to_string()))?;
+        let mut m = make_mesh(mesh_spec, base_dir).map_err(|e| loc.at(Some(&p.name), Some("mesh"), format!("{field}.mesh"), e.to_string()))?;
         if let Some(o) = p.offset {
             m.nodes.iter_mut().for_each(|x| *x += v3(o));
         }
@@ -184,9 +189,7 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
         if !(p.areal_density.is_finite() && p.areal_density >= 0.0) {
             return Err(loc.at(Some(&p.name), Some("areal_density"), format!("{field}.areal_density"), "expected a non-negative mass per area"));
         }
-        // Else the material's own (a fabric's areal density).
-        let material_density = sections.last().and_then(|s| s.material.areal_density());
-        let areal_density = if p.areal_density > 0.0 { p.areal_density } else { gravity_density(&p.name).or(material_density).unwrap_or(0.0) };
+        let areal_density = areal_density.unwrap_or(0.0);
         parts.push(PartInfo { name: p.name.clone(), first_node, n_nodes: m.nodes.len(), first_element, n_elements: m.quads.len(), areal_density });
         meshes.push(m);
     }
@@ -212,7 +215,7 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
     let mut size_fields: Option<Vec<crate::garment::sizing::SizeField>> = None;
     let resolved = match resolved {
         Some(mut g) => {
-            if let Some(fields) = resolve_sizes(&g, scene, &loc, base_dir, &parts, &materials)? {
+            if let Some(fields) = super::sizing::resolve_sizes(&g, scene, &loc, base_dir, &parts, &materials)? {
                 let h = fields.iter().map(|f| f.min()).fold(f64::INFINITY, f64::min);
                 g.element_size = crate::garment::ElementSize::Fixed(h);
                 size_fields = Some(fields);
@@ -665,6 +668,8 @@ fn mesh_counts(spec: &MeshSpec) -> (Option<(u64, u64)>, &'static str) {
         MeshSpec::Annulus { nr, ntheta, .. } => (grid(nr, ntheta, true), "nr × ntheta"),
         MeshSpec::AnnulusRings { ref radii, ntheta } => (grid(radii.len().saturating_sub(1), ntheta, true), "radii × ntheta"),
         MeshSpec::FocusedAnnulus { ntheta, .. } => (grid(1, ntheta, true), "ntheta"),
+        // Resolved to AnnulusRings / Rectangle before the budget is checked.
+        MeshSpec::SizedAnnulus { .. } | MeshSpec::SizedRectangle { .. } => (Some((0, 0)), "element_size"),
         MeshSpec::Obj { .. } => (Some((0, 0)), "the OBJ file"),
     }
 }
@@ -685,6 +690,7 @@ fn make_mesh(spec: &MeshSpec, base_dir: &Path) -> Result<ShellMesh, mesh::MeshEr
         MeshSpec::FocusedAnnulus { ri, ro, ntheta, focus, refine, inner_aspect } => {
             mesh::annulus_rings(&mesh::focused_rings(ri, ro, ntheta, focus, refine, inner_aspect)?, ntheta)
         }
+        MeshSpec::SizedAnnulus { .. } | MeshSpec::SizedRectangle { .. } => Err(mesh::MeshError::Invalid("a sized mesh is generated once its size is resolved (scene::sizing)".to_string())),
         MeshSpec::TwistedStrip { length, width, twist, nx, ny } => mesh::twisted_strip(length, width, rad(twist), nx, ny),
         MeshSpec::Obj { ref path } => mesh::read_obj(&base_dir.join(path)),
     }
@@ -736,84 +742,4 @@ fn area_weights(x: &[Vector3<f64>], elements: &[ElementDef], part: &PartInfo) ->
         }
     }
     w.into_iter().enumerate().map(|(i, a)| (i + part.first_node, a)).collect()
-}
-
-/// The size fields of a garment whose `element_size` (its own or a panel's) is `Auto`, or
-/// None when every size is a fixed number (`garment::sizing`): per ply the bending rigidity
-/// of its material at its thickness and its areal density (the ply's, its material's, or a
-/// `Gravity` load's on a panel or `panel/ply` part using it); the scene's contact bodies
-/// (built here once more, for their surface normals) give the body curvature. Errors are
-/// located at the `element_size` that asked for `Auto`.
-fn resolve_sizes(
-    g: &crate::garment::GarmentSpec,
-    scene: &Scene,
-    loc: &Locator,
-    base_dir: &std::path::Path,
-    parts: &[PartInfo],
-    materials: &BTreeMap<&str, Arc<dyn ShellMaterial>>,
-) -> Result<Option<Vec<crate::garment::sizing::SizeField>>, SceneError> {
-    use crate::garment::sizing::{panel_field, radius_from_normals, PlyPhysics};
-    use crate::garment::ElementSize;
-    let auto = |e: &ElementSize| matches!(e, ElementSize::Auto(_));
-    if !auto(&g.element_size) && !g.panels.iter().any(|p| p.element_size.as_ref().is_some_and(auto)) {
-        // Fixed sizes: a bad panel size is reported here, the garment's by the validation.
-        for p in &g.panels {
-            if let Some((key, msg)) = p.element_size.as_ref().and_then(|e| e.problem()) {
-                let _ = key;
-                return Err(loc.at(Some(&p.name), Some("element_size"), format!("garment.panels[{}].element_size", p.name), msg));
-            }
-        }
-        if g.panels.iter().all(|p| p.element_size.is_none()) {
-            return Ok(None);
-        }
-    }
-    let bending = |ply: &str| {
-        let spec = g.plies.get(ply)?;
-        materials.get(spec.material.as_str()).map(|m| m.bending_rigidity(spec.thickness))
-    };
-    let density = |ply: &str| -> Option<f64> {
-        let spec = g.plies.get(ply)?;
-        if spec.areal_density > 0.0 {
-            return Some(spec.areal_density);
-        }
-        if let Some(d) = materials.get(spec.material.as_str()).and_then(|m| m.areal_density()) {
-            return Some(d);
-        }
-        let names: Vec<String> = g.panels.iter().filter(|p| p.plies.iter().any(|q| q == ply)).flat_map(|p| [p.name.clone(), crate::garment::laminate::alias(&p.name, ply)]).collect();
-        scene.loads.values().find_map(|l| match l {
-            LoadSpec::Gravity { part, areal_density, .. } if names.contains(part) => Some(*areal_density),
-            _ => None,
-        })
-    };
-    // The bodies alone (the contact's part list is checked by the real build later).
-    let bodies = scene.contact.as_ref().and_then(|c| {
-        let mut c = c.clone();
-        c.parts.clear();
-        crate::contact::build_contact(&c, loc, base_dir, parts).ok().map(|s| s.bodies)
-    });
-    let body_radius = |points: &[nalgebra::Vector3<f64>], reach: f64, delta: f64| -> Option<f64> {
-        let bodies = bodies.as_ref()?;
-        let mut r = f64::INFINITY;
-        for b in bodies.iter().filter(|b| !matches!(b.shape, crate::contact::body::Shape::Plane)) {
-            let normal = |x: &nalgebra::Vector3<f64>| b.proximity(x, reach).filter(|q| q.distance.abs() <= reach).map(|q| q.normal);
-            for x in points {
-                if let Some(rx) = radius_from_normals(x, delta, &normal) {
-                    r = r.min(rx);
-                }
-            }
-        }
-        r.is_finite().then_some(r)
-    };
-    let physics = PlyPhysics { bending: &bending, density: &density, body_radius: &body_radius };
-    let mut fields = Vec::with_capacity(g.panels.len());
-    for (pi, p) in g.panels.iter().enumerate() {
-        let field = panel_field(g, pi, &physics).map_err(|(key, msg)| {
-            let own = p.element_size.is_some();
-            let path = if own { format!("garment.panels[{}].element_size", p.name) } else { "garment.element_size".to_string() };
-            let path = if key == "element_size" { path } else { format!("{path}.{key}") };
-            loc.at(if own { Some(&p.name) } else { None }, Some(key), path, format!("panel \"{}\": {msg}", p.name))
-        })?;
-        fields.push(field);
-    }
-    Ok(Some(fields))
 }

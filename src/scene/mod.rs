@@ -7,6 +7,7 @@ mod path;
 pub mod protocol;
 pub mod sequence;
 mod spec;
+mod sizing;
 mod steps;
 
 pub use build::{build, BuiltScene};

@@ -204,6 +204,11 @@ fn two() -> usize {
 pub enum MeshSpec {
     /// Plate in the xy plane, x ∈ [0, lx], y ∈ [0, ly]. Edges xmin, xmax, ymin, ymax.
     Rectangle { lx: f64, ly: f64, nx: usize, ny: usize },
+    /// `Rectangle` whose grid follows from `element_size`: a number h (m) gives
+    /// ⌈lx/h⌉ × ⌈ly/h⌉ elements; `Auto((tolerance: T))` the garment panels' size from the
+    /// fabric's bending length, fold wavelength and the contact bodies' curvature
+    /// (`scene::sizing`). Edges xmin, xmax, ymin, ymax.
+    SizedRectangle { lx: f64, ly: f64, element_size: crate::sizing::ElementSize },
     /// Cylindrical panel about the x axis, point (x, R sin θ, R cos θ). Edges x0, x1,
     /// theta0, theta1. `spacing: Distorted` divides each edge 1:2:…:N (open panels).
     CylindricalPanel {
@@ -253,6 +258,12 @@ pub enum MeshSpec {
         #[serde(default = "unit_aspect")]
         inner_aspect: f64,
     },
+    /// Full flat annulus about the z axis (closed in θ) whose rings and sectors follow from
+    /// `element_size`: a number h (m) gives uniform rings at most h apart and sectors at
+    /// most h wide at ro; `Auto((tolerance: T))` sizes them from the fabric and the contact
+    /// bodies (rings from the bending length and the support's rim, sectors from the folds
+    /// of the overhang; `scene::sizing`). Edges inner, outer.
+    SizedAnnulus { ri: f64, ro: f64, element_size: crate::sizing::ElementSize },
     /// Quad mesh from a Wavefront OBJ file (path relative to the scene file). Edge boundary.
     Obj { path: String },
 }
