@@ -444,6 +444,9 @@ fn summary(scene: &Scene, built: &BuiltScene) {
             q.min_angle_deg, q.max_angle_deg, q.max_aspect_ratio, q.min_jacobian_ratio
         );
     }
+    for (name, report) in &built.sized_parts {
+        say!("  part {name}: {report}");
+    }
     if !built.seams.is_empty() {
         say!("  {} seams, {} tied DOFs", built.seams.len(), m.dofs.ties.len());
     }

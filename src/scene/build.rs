@@ -30,6 +30,9 @@ pub struct BuiltScene {
     pub node_sets: BTreeMap<String, Vec<usize>>,
     /// Mesh quality per part.
     pub quality: Vec<(String, MeshQuality)>,
+    /// The mesh chosen for each sized part (`SizedAnnulus`, `SizedRectangle`) and the length
+    /// scales behind it, by part name.
+    pub sized_parts: Vec<(String, String)>,
     /// Rigid bodies and contact controls.
     pub contact: Option<crate::contact::ContactSetup>,
     /// Buckling-mode imperfection to seed before the solve.
@@ -114,6 +117,8 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
     let mut parts = Vec::new();
     let mut meshes: Vec<ShellMesh> = Vec::new();
     let mut quality = Vec::new();
+    // The meshes chosen for sized parts, as reported.
+    let mut sized_parts = Vec::new();
     // Nodes and elements planned so far, for the memory budget.
     let mut planned: (u64, u64) = (0, 0);
     for (pi, p) in scene.parts.iter().enumerate() {
@@ -157,7 +162,10 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
         let areal_density = if p.areal_density > 0.0 { Some(p.areal_density) } else { gravity_density(&p.name).or(material.areal_density()) };
         // A sized mesh (`SizedAnnulus`) becomes the generator it resolves to.
         let sized = super::sizing::resolve_part_mesh(p, scene, &loc, base_dir, &parts, material.as_ref(), areal_density)?;
-        let mesh_spec = sized.as_ref().unwrap_or(&p.mesh);
+        let mesh_spec = sized.as_ref().map_or(&p.mesh, |(m, _)| m);
+        if let Some((_, report)) = &sized {
+            sized_parts.push((p.name.clone(), report.clone()));
+        }
         // The resource budget, before the mesh is allocated: this part and those before it.
         let (counts, keys) = mesh_counts(mesh_spec);
         let fits = counts
@@ -637,7 +645,7 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
         }
     }
     let model = Model { x0, frames0, elements, sections, parts, dofs, loads };
-    Ok(BuiltScene { model, steps, monitors, node_sets, quality, imperfection, seams, warnings, garment: layout, contact, interply, protocol })
+    Ok(BuiltScene { model, steps, monitors, node_sets, quality, sized_parts, imperfection, seams, warnings, garment: layout, contact, interply, protocol })
 }
 
 fn check_young_poisson(young: f64, poisson: f64, bad: &dyn Fn(&str, &str) -> SceneError) -> Result<(), SceneError> {

@@ -68,7 +68,7 @@ pub struct PartPhysics<'a> {
     pub bodies: &'a [RigidBody],
 }
 
-/// The length scales and the mesh chosen for a sized annulus (as reported).
+/// The length scales and the mesh chosen for a sized annulus.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct AnnulusSizing {
     /// Ring radii (ri … ro).
@@ -109,7 +109,9 @@ pub fn sized_annulus(ri: f64, ro: f64, size: &ElementSize, physics: &PartPhysics
     };
     let (b, rho) = fabric(physics)?;
     let lb = bending_length(b, rho);
-    // The radial profile, sampled at a fraction of the finest size it can ask for.
+    // The radial profile, sampled every (ro − ri)/2000 (65 µm on the Cusick specimen, a
+    // twentieth of its finest ring step; a body's curvature varying faster than that is
+    // seen at the samples only).
     let samples = 2000usize;
     let dr = (ro - ri) / samples as f64;
     let radii_s: Vec<f64> = (0..=samples).map(|k| ri + dr * k as f64).collect();
@@ -347,7 +349,8 @@ fn scene_bodies(scene: &Scene, loc: &Locator, base_dir: &Path, parts: &[PartInfo
 
 /// The generator spec of part `p` with its size resolved: a `SizedAnnulus` becomes the
 /// `AnnulusRings` of [`sized_annulus`], a `SizedRectangle` the `Rectangle` of
-/// [`sized_rectangle`]; any other spec None.
+/// [`sized_rectangle`], each with a line reporting the mesh and the length scales behind it;
+/// any other spec None.
 /// `areal_density` is the part's (its own, a Gravity load's or its material's); errors are
 /// located at the part's `mesh` field that is wrong (`ri`, `ro`, `element_size`, its
 /// `tolerance` or `tension`).
@@ -359,7 +362,7 @@ pub(super) fn resolve_part_mesh(
     parts: &[PartInfo],
     material: &dyn ShellMaterial,
     areal_density: Option<f64>,
-) -> Result<Option<MeshSpec>, SceneError> {
+) -> Result<Option<(MeshSpec, String)>, SceneError> {
     if !matches!(p.mesh, MeshSpec::SizedAnnulus { .. } | MeshSpec::SizedRectangle { .. }) {
         return Ok(None);
     }
@@ -373,14 +376,31 @@ pub(super) fn resolve_part_mesh(
         };
         loc.at(Some(&p.name), Some(key), path, format!("part \"{}\": {msg}", p.name))
     };
+    let mm = |x: f64| format!("{:.2} mm", 1e3 * x);
+    let body = |r: Option<f64>| r.map_or("none near".to_string(), mm);
     match p.mesh {
         MeshSpec::SizedAnnulus { ri, ro, ref element_size } => {
-            let sizing = sized_annulus(ri, ro, element_size, &physics).map_err(located)?;
-            Ok(Some(MeshSpec::AnnulusRings { radii: sizing.radii, ntheta: sizing.ntheta }))
+            let z = sized_annulus(ri, ro, element_size, &physics).map_err(located)?;
+            let mut report = format!("SizedAnnulus: {} rings × {} sectors", z.radii.len() - 1, z.ntheta);
+            if matches!(element_size, ElementSize::Auto(_)) {
+                report += &format!(
+                    " (ℓ_b {}, fold wavelength λ {}, ℓ_T {}, support edge r {}, body radius {})",
+                    mm(z.bending_length),
+                    mm(z.wrinkle_wavelength),
+                    mm(z.tension_length),
+                    mm(z.edge_radius),
+                    body(z.body_radius)
+                );
+            }
+            Ok(Some((MeshSpec::AnnulusRings { radii: z.radii, ntheta: z.ntheta }, report)))
         }
         MeshSpec::SizedRectangle { lx, ly, ref element_size } => {
-            let (nx, ny, _) = sized_rectangle(lx, ly, element_size, &physics).map_err(located)?;
-            Ok(Some(MeshSpec::Rectangle { lx, ly, nx, ny }))
+            let (nx, ny, scales) = sized_rectangle(lx, ly, element_size, &physics).map_err(located)?;
+            let mut report = format!("SizedRectangle: {nx} × {ny} elements");
+            if let Some(l) = scales {
+                report += &format!(" (ℓ_b {}, fold wavelength λ {}, body radius {})", mm(l.bending_length), mm(l.wrinkle_wavelength), body(l.body_radius));
+            }
+            Ok(Some((MeshSpec::Rectangle { lx, ly, nx, ny }, report)))
         }
         _ => Ok(None),
     }
