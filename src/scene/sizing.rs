@@ -218,7 +218,7 @@ fn fabric(physics: &PartPhysics) -> Result<(f64, f64), (&'static str, String)> {
 /// Sectors for `n` widths round the circumference: ⌈n⌉, at least 8.
 fn sectors(n: f64) -> Result<usize, (&'static str, String)> {
     if !(n.is_finite() && n < crate::mesh::generate::MAX_NODES as f64) {
-        return Err(("element_size", format!("the element size asks for {n} sectors round the annulus")));
+        return Err(("element_size", format!("the element size asks for {n:.0} sectors round the annulus")));
     }
     Ok((n.ceil() as usize).max(8))
 }
