@@ -2,10 +2,11 @@
 //! the scene: the garment panels' size fields ([`resolve_sizes`], `garment::sizing`) and the
 //! meshes of sized generated parts ([`resolve_part_mesh`]).
 //!
-//! A `SizedAnnulus` part (a circular
-//! specimen such as the Cusick one) with `element_size: Auto((tolerance: T))` becomes an
-//! `AnnulusRings` mesh whose ring spacing follows a radial size field and whose sector count
-//! follows the folds of its free overhang (`crate::sizing` for the length scales).
+//! A `SizedAnnulus` part (a circular specimen such as the Cusick one) with
+//! `element_size: Auto((tolerance: T))` becomes an `AnnulusRings` mesh whose ring spacing
+//! follows a radial size field and whose sector count follows the folds of its free overhang
+//! (`crate::sizing` for the length scales); a `SizedRectangle` becomes a `Rectangle` at the
+//! garment panels' isotropic size ([`sized_rectangle`]).
 //!
 //! The annulus' grid directions are those of a drape over a round support: radially the
 //! fabric hangs, circumferentially it folds. Each direction takes the length scale of its own
