@@ -19,10 +19,11 @@ left-hand ones.
 
 Usage: python3 garments/make_suit.py [OUT.ron] [--element-size H] [--discrete]
                                      [--protocol MOTION] [--side-back D]
-                                     [--fine-underarm H]
-(--protocol body/suit_motion.ron --fine-underarm 0.04: the mannequin moves through that
-motion file after the drape, one step to rest per frame, with the under sleeves and gussets
-meshed at 4 cm: garments/nbc_suit_protocol.ron.)
+                                     [--fine-underarm H] [--fine PREFIX H ...]
+(--protocol body/suit_motion.ron --fine-underarm 0.04 --fine sleeve_top_ 0.06 --fine
+sleeve_under_fore_ 0.06: the mannequin moves through that motion file after the drape, one
+step to rest per frame, with the under sleeves of the upper arms and the gussets meshed at
+4 cm and the other sleeve pieces at 6 cm: garments/nbc_suit_protocol.ron.)
 """
 
 import math
@@ -118,7 +119,16 @@ ARMHOLE = math.hypot(p_sh[0] - p_under[0], p_sh[1] - p_under[1])  # each half of
 # upper arms and the underarm gussets meshed at H instead of the garment's element size. When
 # the arm moves against the trunk the under sleeve folds; at 0.1 m (67-79 mm elements) the fold
 # forms inside one element (the laminate's bending length is 61.5 mm) and the solve stops.
+# The same holds for the rest of the sleeve in the protocol: with the forearms' under sleeves
+# at 0.1 m one folds through itself when the arms are lowered from the horizontal (after the
+# trunk twist); with those at 6 cm, a forearm's top sleeve (62.6 mm elements) folds while the
+# arms are raised; with every sleeve piece at 6 cm or finer the arms go up and down.
 FINE_UNDERARM = float(sys.argv[sys.argv.index("--fine-underarm") + 1]) if "--fine-underarm" in sys.argv else 0.0
+# Finer pieces elsewhere (--fine PREFIX H, repeatable): every panel whose name starts with
+# PREFIX (e.g. sleeve_under_fore_) meshed at H.
+FINE = [(sys.argv[i + 1], float(sys.argv[i + 2])) for i, a in enumerate(sys.argv) if a == "--fine"]
+if FINE_UNDERARM:
+    FINE = [("sleeve_under_upper_", FINE_UNDERARM), ("gusset_", FINE_UNDERARM)] + FINE
 SIDE_BACK = float(sys.argv[sys.argv.index("--side-back") + 1]) if "--side-back" in sys.argv else 0.0
 
 
@@ -419,6 +429,8 @@ def ron(element_size, discrete, protocol=None, name="nbc_suit", body="body"):
         w("// OUT.ron --discrete`).")
     if FINE_UNDERARM:
         w(f"// Under the arm: the under sleeves of the upper arms and the gussets meshed at {f(FINE_UNDERARM)} m (--fine-underarm).")
+    for prefix, h in FINE[2 if FINE_UNDERARM else 0:]:
+        w(f"// Meshed at {f(h)} m: the panels {prefix}* (--fine {prefix} {f(h)}).")
     if SIDE_BACK != 0.0:
         w(f"// Seam layout: the trunk's side seams swept back {f(SIDE_BACK)} m at their bottom (--side-back).")
     w(f"// Element size {element_size} m (coarse).")
@@ -445,8 +457,9 @@ def ron(element_size, discrete, protocol=None, name="nbc_suit", body="body"):
         edges = ", ".join(f'"{k}": (from: {a}, to: {b})' for k, (a, b) in p.edges.items())
         w("            (")
         w(f'                name: "{p.name}",')
-        if FINE_UNDERARM and p.name.startswith(("sleeve_under_upper_", "gusset_")):
-            w(f"                element_size: Some({f(FINE_UNDERARM)}),")
+        sizes = [h for prefix, h in FINE if p.name.startswith(prefix)]
+        if sizes:
+            w(f"                element_size: Some({f(sizes[-1])}),")
         w(f"                outline: [{', '.join(pt(q) for q in p.outline)}],")
         w(f"                edges: {{{edges}}},")
         w(f"                grain: {pt(p.grain)},")
@@ -501,6 +514,9 @@ if __name__ == "__main__":
         if flag in args:
             i = args.index(flag)
             del args[i:i + 2]
+    while "--fine" in args:
+        i = args.index("--fine")
+        del args[i:i + 3]
     protocol = None
     if "--protocol" in args:
         i = args.index("--protocol")

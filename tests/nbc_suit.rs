@@ -141,12 +141,13 @@ fn assert_sewn_and_at_rest(built: &scene::BuiltScene, state: &plyshell::model::S
 }
 
 /// The first pose of the suit's movement protocol (issue 17): `garments/nbc_suit_protocol.ron`
-/// (the same suit with its under sleeves and underarm gussets meshed at 4 cm, sewn and draped
-/// in the A-pose, then moved by `src/scene/protocol.rs`) with its motion cut to
-/// `garments/body/suit_twist.ron`: the trunk turned 30° to the left at the waist in 1 s, arms
-/// and legs held in the A-pose (87 time steps, 533 Newton iterations for the pose since seam
-/// nodes ride along with the moving body, 707 and 4476 before). At rest in the new pose
-/// (`assert_rests_in_the_pose`).
+/// (the same suit with its under sleeves of the upper arms and underarm gussets meshed at 4
+/// cm and its other sleeve pieces at 6 cm, sewn and draped in the A-pose, then moved by
+/// `src/scene/protocol.rs`) with its motion cut to `garments/body/suit_twist.ron`: the trunk
+/// turned 30° to the left at the waist in 1 s, arms and legs held in the A-pose (129 time
+/// steps, 1007 Newton iterations for the pose; with only the under sleeves and gussets at 4 cm
+/// 87 and 533, and 707 and 4476 before seam nodes rode along with the moving body). At rest
+/// in the new pose (`assert_rests_in_the_pose`).
 #[test]
 fn nbc_suit_follows_the_trunk_twist_and_rests() {
     assert_rests_in_the_pose("body/suit_twist.ron");
@@ -154,8 +155,8 @@ fn nbc_suit_follows_the_trunk_twist_and_rests() {
 
 /// The suit's arm raise (issue 17): `garments/nbc_suit_protocol.ron` with its motion cut to
 /// `garments/body/suit_arms_raised.ron`, both arms raised sideways from 45° to the horizontal
-/// in 1 s, legs held in the A-pose (187 time steps, 1389 Newton iterations for the pose; not
-/// at rest after ~3000 time steps while the cuffs' seam nodes were left behind by the rising
+/// in 1 s, legs held in the A-pose (127 time steps, 955 Newton iterations for the pose; 187
+/// and 1389 with the forearms' and top sleeves at 0.1 m; not at rest after ~3000 time steps while the cuffs' seam nodes were left behind by the rising
 /// forearms). At rest in the new pose (`assert_rests_in_the_pose`).
 #[test]
 fn nbc_suit_raises_the_arms_and_rests() {
