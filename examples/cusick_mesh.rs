@@ -13,10 +13,10 @@
 //! penetration over the thickness. `docs/drape/cusick_mesh_study.jsonl` holds the runs of the
 //! README's table.
 
-use nalgebra::Vector3;
-use plyshell::contact::drape::seed_outside_support;
-use plyshell::solver::imperfection::RandomField;
-use plyshell::{analysis, scene};
+#[path = "../tests/common/cusick_specimen.rs"]
+mod cusick_specimen;
+
+use plyshell::analysis;
 
 fn main() -> Result<(), String> {
     let args: Vec<String> = std::env::args().collect();
@@ -30,22 +30,7 @@ fn main() -> Result<(), String> {
         let radii = plyshell::mesh::focused_rings(0.02, 0.15, a as usize, 0.09, k, 4.0).map_err(|e| e.to_string())?;
         mesh = format!("AnnulusRings(radii: {radii:?}, ntheta: {})", n as usize);
     }
-    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/garments/drape/cusick.ron");
-    let text = std::fs::read_to_string(path).map_err(|e| e.to_string())?;
-    let h = plyshell::material::FabricProperties::preset(&preset).ok_or("unknown preset")?.thickness;
-    let text = text
-        .replace("preset: Some(\"cotton_broadcloth\")", &format!("preset: Some(\"{preset}\")"))
-        .replace("thickness: 0.3e-3", &format!("thickness: {h:e}"))
-        .replace("translation: (0.0, 0.0, -0.010149999)", &format!("translation: (0.0, 0.0, {:e})", -0.5 * h + 1e-9 - 0.01))
-        .replace("translation: (0.0, 0.0, 0.010149999)", &format!("translation: (0.0, 0.0, {:e})", 0.5 * h - 1e-9 + 0.01))
-        .replace("output: (every: 50)", "output: (vtu: false)")
-        .replace("FocusedAnnulus(ri: 0.02, ro: 0.15, ntheta: 48, focus: 0.09, refine: 8.0, inner_aspect: 4.0)", &mesh);
-    let sc = scene::parse(path, &text).map_err(|e| e.to_string())?;
-    let mut built = scene::build(&sc, path, &text).map_err(|e| e.to_string())?;
-    if seed != 0 {
-        let rf = RandomField { amplitude: 0.1e-3, correlation_length: 0.05, seed };
-        built.model = seed_outside_support(&built.model, &rf, &Vector3::zeros(), 0.09, 0.11);
-    }
+    let (sc, built, h) = cusick_specimen::specimen(&preset, seed, &mesh)?;
     let s = analysis::run(&sc, &built, &Default::default(), &mut |_| {}).map_err(|e| e.to_string())?;
     let d = &s.extra["drape"];
     let line = serde_json::json!({

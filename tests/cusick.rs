@@ -9,10 +9,11 @@
 //! refined family (issue 4). The wider mesh study and the fold distribution are produced by
 //! `examples/cusick.rs` and reported in the issue notes.
 
-use nalgebra::Vector3;
-use plyshell::contact::drape::seed_outside_support;
-use plyshell::solver::imperfection::RandomField;
-use plyshell::{analysis, scene};
+#[path = "common/cusick_specimen.rs"]
+mod cusick_specimen;
+
+use cusick_specimen::SHIPPED_MESH;
+use plyshell::analysis;
 
 /// Drape outcome of one run.
 struct Drape {
@@ -20,9 +21,6 @@ struct Drape {
     penetration_over_h: f64,
     dofs: usize,
 }
-
-/// The scene's specimen mesh, as written in `garments/drape/cusick.ron`.
-const SHIPPED_MESH: &str = "FocusedAnnulus(ri: 0.02, ro: 0.15, ntheta: 48, focus: 0.09, refine: 8.0, inner_aspect: 4.0)";
 
 /// Runs the shipped Cusick scene with `preset` to rest — with `seed` ≠ 0 from a specimen
 /// carrying the seeded 0.1 mm random-field imperfection (correlation length 50 mm) of
@@ -40,22 +38,7 @@ fn cusick_on(preset: &str, seed: u64, ntheta: usize) -> Drape {
 
 /// [`cusick`] with the specimen meshed by `mesh` (RON text of a mesh spec).
 fn cusick_meshed(preset: &str, seed: u64, mesh: &str) -> Drape {
-    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/garments/drape/cusick.ron");
-    let text = std::fs::read_to_string(path).expect("scene");
-    let h = plyshell::material::FabricProperties::preset(preset).expect("preset").thickness;
-    let text = text
-        .replace("preset: Some(\"cotton_broadcloth\")", &format!("preset: Some(\"{preset}\")"))
-        .replace("thickness: 0.3e-3", &format!("thickness: {h:e}"))
-        .replace("translation: (0.0, 0.0, -0.010149999)", &format!("translation: (0.0, 0.0, {:e})", -0.5 * h + 1e-9 - 0.01))
-        .replace("translation: (0.0, 0.0, 0.010149999)", &format!("translation: (0.0, 0.0, {:e})", 0.5 * h - 1e-9 + 0.01))
-        .replace("output: (every: 50)", "output: (vtu: false)")
-        .replace(SHIPPED_MESH, mesh);
-    let sc = scene::parse(path, &text).expect("parse");
-    let mut built = scene::build(&sc, path, &text).expect("build");
-    if seed != 0 {
-        let rf = RandomField { amplitude: 0.1e-3, correlation_length: 0.05, seed };
-        built.model = seed_outside_support(&built.model, &rf, &Vector3::zeros(), 0.09, 0.11);
-    }
+    let (sc, built, h) = cusick_specimen::specimen(preset, seed, mesh).expect("the Cusick specimen");
     let s = analysis::run(&sc, &built, &Default::default(), &mut |_| {}).expect("solve");
     let d = &s.extra["drape"];
     let dc = d["drape_coefficient_percent"].as_f64().expect("dc");

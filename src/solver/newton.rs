@@ -79,7 +79,10 @@ pub struct Timings {
     /// Extra contributions (contact, stabilization), including their proximity search.
     #[serde(default)]
     pub contact: f64,
-    /// Proximity search of the contact contributions (part of `contact`).
+    /// Proximity search of the contact contributions (part of `contact`): for body contact
+    /// the nodes' closest points; for barrier surface contact the candidate pairs, their gap
+    /// bounds and the distances and barrier values of those measured (everything but the
+    /// derivatives and tangent blocks) — on a three-ply sleeve mostly the distances.
     #[serde(default)]
     pub contact_search: f64,
     /// Times the tangent's pattern grew (and the symbolic analysis was redone, its time in

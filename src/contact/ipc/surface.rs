@@ -217,6 +217,8 @@ pub struct SurfaceContact {
     last_potential: f64,
     /// Report the pair Hessians projected onto the PSD cone ([`NodalForces::project_hessians`]).
     project: bool,
+    /// Wall time (s) of the candidate pairs, their gap bounds and the measured pairs'
+    /// distances, barrier values and friction terms (`NodalForces::search_seconds`).
     search_s: f64,
     /// Wall time split, for the summary.
     timings: std::sync::Mutex<SurfaceTimings>,
