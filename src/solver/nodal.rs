@@ -107,6 +107,12 @@ pub trait NodalForces: Send {
     fn project_hessians(&mut self, on: bool) {
         let _ = on;
     }
+    /// Whether the term keeps exact, possibly indefinite Hessian blocks between nodes (surface
+    /// contact pairs): an indefinite effective tangent is then projected term by term, not
+    /// shifted on its diagonal (see `time_step`). Default: false.
+    fn indefinite_pairs(&self) -> bool {
+        false
+    }
     /// A summary of the whole run: (section name in summary.json, value).
     fn summary(&self) -> Option<(String, serde_json::Value)> {
         None

@@ -482,6 +482,10 @@ impl NodalForces for SurfaceContact {
         self.project = on;
     }
 
+    fn indefinite_pairs(&self) -> bool {
+        true
+    }
+
     /// The barrier and friction energies at `state` summed as `add_coupled` sums them (the
     /// same value, bit for bit: the same terms in the same order), without their gradients
     /// and Hessians; infinite at a pair through zero gap. The record of the last evaluation
