@@ -100,7 +100,9 @@ pub struct Timings {
     /// trial was rejected).
     #[serde(default)]
     pub line_searches_cut: usize,
-    /// Newton iterations whose tangent had its element Hessians projected to PSD.
+    /// Newton iterations whose indefinite effective tangent was modified for a descent
+    /// direction: its diagonal shifted (no surface contact) or its element (and contact pair)
+    /// Hessians projected to PSD (`time_step`).
     #[serde(default)]
     pub projected_iterations: usize,
 }

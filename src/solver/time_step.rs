@@ -3,7 +3,8 @@
 //! contact, the minimisation of the step's incremental potential
 //! ½‖u − ũ‖²_M/Δt² + damping + Ψ − f·u + contact (Li et al. 2020, *Incremental Potential
 //! Contact*, §4): Newton directions from the exact tangent while it is positive definite,
-//! else from the tangent with the element Hessians — and if need be the contact pairs'
+//! else — without surface contact — from the tangent with a small diagonal shift
+//! (`Solver::shifted_factor`), else from the tangent with the element Hessians — and if need be the contact pairs'
 //! Hessians — projected onto the positive semi-definite cone (Teran et al. 2005), an Armijo
 //! energy line search filtered by collision detection, and inexact steps away from rest
 //! (Kelley & Keyes 1998).
