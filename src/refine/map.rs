@@ -76,6 +76,13 @@ pub fn inverse_bilinear(c: &[[f64; 2]; 4], p: [f64; 2]) -> Option<(f64, f64, f64
             break;
         }
     }
+    // Only a converged solution locates the point (far outside, the bilinear extension may
+    // fold and Newton wander: seen on a Delaunay quad mesh, a point 8 mm outside a 4 cm quad
+    // "found" at (−0.05, 0.24)).
+    let (x, _) = at(xi, eta);
+    if (Vector2::new(p[0], p[1]) - x).norm() > 1e-10 * size.max(f64::MIN_POSITIVE) {
+        return None;
+    }
     let outside = (xi.abs() - 1.0).max(eta.abs() - 1.0).max(0.0);
     Some((xi, eta, outside))
 }

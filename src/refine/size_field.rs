@@ -57,8 +57,8 @@ pub fn node_lines(lines: &[f64], sizes: &[f64], min_cells: usize) -> Vec<f64> {
         let joint = lines.get(k + 2).map(|e| e - lines[k]);
         if let Some(j) = joint
             && n > min_cells.max(2)
-            && h[k] >= j
-            && h[k + 1] >= j
+            && h[k] >= j * (1.0 - 1e-9)
+            && h[k + 1] >= j * (1.0 - 1e-9)
         {
             spans.push((lines[k], lines[k + 2], h[k].min(h[k + 1])));
             k += 2;
