@@ -276,3 +276,34 @@ fn drape_refinement_concentrates_elements_in_the_folds() {
     assert!(share_elements > share_area, "new elements {share_elements} vs area {share_area} in the marked region");
     assert!(eta_after < eta_before, "indicator {eta_before} → {eta_after} in the marked region");
 }
+
+/// Refinement requests it cannot honour are located errors naming the field: a tolerance out
+/// of range, zero passes, `refine` on a step but the last, a part that is not a rectangle.
+#[test]
+fn bad_refine_requests_are_located() {
+    let err = |text: &str| {
+        let sc = scene::parse("refine.ron", text).unwrap_or_else(|e| panic!("{e}"));
+        match scene::build(&sc, "refine.ron", text) {
+            Ok(_) => panic!("accepted"),
+            Err(e) => e,
+        }
+    };
+    let e = err(&strip(8, 2, "Some((tolerance: 0.7))"));
+    println!("{e}");
+    assert_eq!(e.field, "steps[hang].refine.tolerance");
+    assert!(e.line == 8 && e.message.contains("between 0 and 0.5"), "{e}");
+    let e = err(&strip(8, 2, "Some((tolerance: 0.01, passes: 0))"));
+    assert_eq!(e.field, "steps[hang].refine.passes");
+    let two = strip(8, 2, "Some((tolerance: 0.01))").replace(
+        r#"refine: Some((tolerance: 0.01)))]"#,
+        r#"refine: Some((tolerance: 0.01))), (name: "again", increments: 1, scale: {"weight": 1.0})]"#,
+    );
+    let e = err(&two);
+    println!("{e}");
+    assert_eq!(e.field, "steps[hang].refine");
+    assert!(e.message.contains("only the last step"), "{e}");
+    let tube = strip(8, 2, "Some((tolerance: 0.01))").replace("Rectangle(lx: 0.1, ly: 0.03, nx: 8, ny: 2)", "CylindricalPanel(radius: 0.2, length: 0.1, theta0: 0.0, theta1: 10.0, n_axial: 8, n_circ: 2)").replace("edge: \"xmin\"", "edge: \"x0\"");
+    let e = err(&tube);
+    println!("{e}");
+    assert!(e.message.contains("Rectangle, SizedRectangle and GradedRectangle parts only"), "{e}");
+}
