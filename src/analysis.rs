@@ -42,8 +42,17 @@ pub struct RunOptions {
 
 /// Solves `built` (from `scene`), reporting progress, and writes VTU/PVD, summary.json and
 /// the monitor plot into the output directory. A first step with `coarse_levels` is solved
-/// by mesh sequencing (`analysis_sequence`).
+/// by mesh sequencing (`analysis_sequence`), a last step with `refine` by a-posteriori
+/// refinement passes (`refine`).
 pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &mut dyn FnMut(&Progress)) -> Result<Summary, RunError> {
+    if crate::refine::requested(scene).is_some() {
+        return crate::refine::run(scene, built, options, progress);
+    }
+    run_unrefined(scene, built, options, progress)
+}
+
+/// [`run`] without the refinement passes (mesh sequencing still applies).
+pub fn run_unrefined(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &mut dyn FnMut(&Progress)) -> Result<Summary, RunError> {
     if crate::scene::sequence::coarse_levels(scene) > 0 {
         return crate::analysis_sequence::run(scene, built, options, progress);
     }

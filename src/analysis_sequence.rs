@@ -133,7 +133,7 @@ fn map_level(ps: &Scene, pb: &BuiltScene, st: &State, sc: &Scene, b: &BuiltScene
 /// they are (the interpolated distance of a convex body exceeds the distance of the
 /// interpolated point everywhere, not only where the sheet touches it). Returns the nodes
 /// moved, the largest move (m) and the smallest gap of a face to a body after the moves (m).
-fn push_out(coarse: &Model, st: &State, fine: &Model, state: &mut State, weights: &[Vec<(usize, f64)>], contact: &crate::contact::ContactSetup) -> (usize, f64, f64) {
+pub(crate) fn push_out(coarse: &Model, st: &State, fine: &Model, state: &mut State, weights: &[Vec<(usize, f64)>], contact: &crate::contact::ContactSetup) -> (usize, f64, f64) {
     let Some(settings) = &contact.barrier else { return (0, 0.0, f64::INFINITY) };
     // Face offsets h/2 and barrier thicknesses d̂ of the participating fine nodes.
     let zones = crate::contact::BarrierContact::new(fine, Vec::new(), &contact.parts, settings);
@@ -178,7 +178,7 @@ fn push_out(coarse: &Model, st: &State, fine: &Model, state: &mut State, weights
 /// director tilts that cost it no energy but strain every finer mesh in shear; released at
 /// once, that energy spins the directors (tiny rotary inertia) and cuts the time step to
 /// nothing. Returns the time steps and Newton iterations.
-fn relax_directors(sc: &Scene, b: &BuiltScene, state: &mut State) -> Result<(usize, usize), String> {
+pub(crate) fn relax_directors(sc: &Scene, b: &BuiltScene, state: &mut State) -> Result<(usize, usize), String> {
     let mut held = b.model.clone();
     if !held.dofs.ties.is_empty() {
         return Err("the model has ties: directors are not relaxed".into());
@@ -199,7 +199,7 @@ fn relax_directors(sc: &Scene, b: &BuiltScene, state: &mut State) -> Result<(usi
 
 /// Relative static residual of the mapped `state` on the scene's model under its first
 /// step's target loads, with its contact (the measure the step's rest test uses).
-fn mapped_residual(sc: &Scene, b: &BuiltScene, state: &mut State) -> Result<f64, String> {
+pub(crate) fn mapped_residual(sc: &Scene, b: &BuiltScene, state: &mut State) -> Result<f64, String> {
     let mut solver = Solver::new(&b.model, sc.solver.clone()).map_err(|e| e.to_string())?;
     if let Some(c) = &b.contact {
         crate::contact::attach(&mut solver, &b.model, c)?;

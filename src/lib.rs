@@ -29,6 +29,7 @@ pub mod scene;
 pub mod analysis;
 pub mod analysis_auto;
 pub mod analysis_sequence;
+pub mod refine;
 pub mod compare;
 pub mod check;
 pub mod io;

@@ -514,6 +514,14 @@ fn solve(scene: &Scene, built: &BuiltScene, source: (&str, &str), out: &Path, qu
                 s.timings.factorization,
                 s.timings.solve
             );
+            if let Some(passes) = s.extra.get("refinement").and_then(|r| r["passes"].as_array()) {
+                for p in passes.iter().skip(1) {
+                    say!(
+                        "  refinement pass {}: {} → {} elements ({} marked, {} coarsened), grids {}, mapped static residual {:.2e}, {} time steps, {} Newton iterations",
+                        p["pass"], p["elements_before"], p["elements"], p["marked"], p["coarsened"], p["grids"], p["static_residual"].as_f64().unwrap_or(f64::NAN), p["time_steps"], p["newton_iterations"]
+                    );
+                }
+            }
             for h in &s.monitors {
                 if let Some(last) = h.values.last() {
                     let vals: Vec<String> = h.quantities.iter().zip(last).map(|(q, v)| format!("{q} = {v:.6e}")).collect();

@@ -14,6 +14,9 @@ pub struct ExportOptions {
     pub binary: bool,
     /// Further point data (name, components, values per node), e.g. contact pressure.
     pub extra_point_data: Vec<(String, usize, Vec<f64>)>,
+    /// Further cell data (name, components, values per element), e.g. the refinement
+    /// indicator.
+    pub extra_cell_data: Vec<(String, usize, Vec<f64>)>,
 }
 
 /// Writes `state` of `model` as a VTU: points at the deformed mid-surface; point data
@@ -61,7 +64,10 @@ pub fn write_state_vtu(path: &Path, model: &Model, state: &State, options: &Expo
             DataArray { name: "membrane_strain", components: 3, values: &strain },
             DataArray { name: "membrane_stress", components: 3, values: &stress },
             DataArray { name: "energy_density", components: 1, values: &energy },
-        ],
+        ]
+        .into_iter()
+        .chain(options.extra_cell_data.iter().map(|(name, components, values)| DataArray { name, components: *components, values }))
+        .collect(),
         int_cell_data: vec![("part", part), ("failed", failed)],
         field_data: vec![],
     };

@@ -205,6 +205,34 @@ pub fn rectangle(lx: f64, ly: f64, nx: usize, ny: usize) -> Result<ShellMesh, Me
     finish("rectangle", "check the parameters", m)
 }
 
+/// Rectangle in the xy plane with its node lines at the given coordinates: `xs` from 0 to
+/// `lx`, `ys` from 0 to `ly`, each strictly increasing (a graded tensor-product grid, e.g. the
+/// refined mesh of `crate::refine`). Node (i, j) is (xs[i], ys[j], 0); edges as [`rectangle`].
+pub fn graded_rectangle(lx: f64, ly: f64, xs: &[f64], ys: &[f64]) -> Result<ShellMesh, MeshError> {
+    positive("lx", lx)?;
+    positive("ly", ly)?;
+    for (name, lines, end) in [("x", xs, lx), ("y", ys, ly)] {
+        count(&format!("the number of {name} lines"), lines.len(), 2)?;
+        let tol = 1e-9 * end;
+        if (lines[0]).abs() > tol || (lines[lines.len() - 1] - end).abs() > tol {
+            return Err(MeshError::Invalid(format!("the {name} lines must run from 0 to {end}, got {} to {}", lines[0], lines[lines.len() - 1])));
+        }
+        if let Some(k) = lines.windows(2).position(|w| !(w[1] > w[0])) {
+            return Err(MeshError::Invalid(format!("the {name} lines must increase strictly: line {} ({}) is not above line {k} ({})", k + 1, lines[k + 1], lines[k])));
+        }
+    }
+    let (nx, ny) = (xs.len() - 1, ys.len() - 1);
+    let g = Grid::new(nx, ny, false)?;
+    let mut m = g.build(|i, j| (Vector3::new(xs[i], ys[j], 0.0), Vector3::z()))?;
+    m.edges = edges(vec![
+        ("xmin", g.row_v(0)),
+        ("xmax", g.row_v(nx)),
+        ("ymin", g.row_u(0)),
+        ("ymax", g.row_u(ny)),
+    ]);
+    finish("graded rectangle", "check the node lines", m)
+}
+
 /// Cylindrical panel of radius `radius` about the global x axis with
 /// `n_axial x n_circ` quads: x in `[0, length]`, angle θ from `theta0` to
 /// `theta1` (radians, measured from +z towards +y), node

@@ -20,7 +20,7 @@ pub mod select;
 pub mod spacing;
 
 pub use annulus::{annulus, annulus_rings, focused_rings, sized_rings, slit_annulus};
-pub use generate::{cylindrical_panel, cylindrical_panel_spaced, hemisphere, hemisphere_spaced, rectangle, twisted_strip};
+pub use generate::{cylindrical_panel, cylindrical_panel_spaced, hemisphere, hemisphere_spaced, graded_rectangle, rectangle, twisted_strip};
 pub use spacing::Spacing;
 pub use obj::{from_obj, read_obj};
 pub use select::{select_box, select_edge, select_nearest, select_plane};

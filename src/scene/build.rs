@@ -669,6 +669,7 @@ fn mesh_counts(spec: &MeshSpec) -> (Option<(u64, u64)>, &'static str) {
     };
     match *spec {
         MeshSpec::Rectangle { nx, ny, .. } => (grid(nx, ny, false), "nx × ny"),
+        MeshSpec::GradedRectangle { ref x, ref y, .. } => (grid(x.len().saturating_sub(1), y.len().saturating_sub(1), false), "x × y"),
         MeshSpec::CylindricalPanel { n_axial, n_circ, .. } => (grid(n_axial, n_circ, false), "n_axial × n_circ"),
         MeshSpec::Hemisphere { n_merid, n_circ, .. } => (grid(n_merid, n_circ, false), "n_merid × n_circ"),
         MeshSpec::SlitAnnulus { nr, ntheta, .. } => (grid(nr, ntheta, false), "nr × ntheta"),
@@ -686,6 +687,7 @@ fn make_mesh(spec: &MeshSpec, base_dir: &Path) -> Result<ShellMesh, mesh::MeshEr
     let rad = f64::to_radians;
     match *spec {
         MeshSpec::Rectangle { lx, ly, nx, ny } => mesh::rectangle(lx, ly, nx, ny),
+        MeshSpec::GradedRectangle { lx, ly, ref x, ref y } => mesh::graded_rectangle(lx, ly, x, y),
         MeshSpec::CylindricalPanel { radius, length, theta0, theta1, n_axial, n_circ, spacing } => {
             mesh::cylindrical_panel_spaced(radius, length, rad(theta0), rad(theta1), n_axial, n_circ, spacing)
         }

@@ -209,6 +209,10 @@ pub enum MeshSpec {
     /// fabric's bending length, fold wavelength and the contact bodies' curvature
     /// (`scene::sizing`). Edges xmin, xmax, ymin, ymax.
     SizedRectangle { lx: f64, ly: f64, element_size: crate::sizing::ElementSize },
+    /// `Rectangle` with its node lines at given coordinates: `x` from 0 to `lx` and `y` from 0
+    /// to `ly`, strictly increasing (a graded grid; written by a-posteriori refinement,
+    /// `crate::refine`). Edges xmin, xmax, ymin, ymax.
+    GradedRectangle { lx: f64, ly: f64, x: Vec<f64>, y: Vec<f64> },
     /// Cylindrical panel about the x axis, point (x, R sin θ, R cos θ). Edges x0, x1,
     /// theta0, theta1. `spacing: Distorted` divides each edge 1:2:…:N (open panels).
     CylindricalPanel {
@@ -375,6 +379,10 @@ pub struct StepSpec {
     /// following through limit points) or `Buckling(modes: ..)` (linearized buckling).
     #[serde(default)]
     pub kind: StepKind,
+    /// A-posteriori refinement after this (last) step: `Some((tolerance: T, passes: N))`
+    /// (`crate::refine`).
+    #[serde(default)]
+    pub refine: Option<crate::refine::RefineSpec>,
 }
 
 /// A monitored point: the node nearest to `point`, with the displacement components kept.
