@@ -21,6 +21,7 @@ use crate::element::{orientation, ElemMat, ElemVec, ElementFailure, ElementGeome
 use crate::material::Voigt5;
 use crate::model::{Model, State, FIXED, UNTIED};
 
+mod grow;
 pub mod psd;
 mod store;
 pub use store::CACHE_ELEMENTS;
@@ -251,13 +252,7 @@ impl Assembler {
             }
         }
         for &(a, b) in couplings {
-            let ea: Vec<usize> = (0..3).flat_map(|k| model.dofs.expand(NODE_DOFS * a + k)).map(|(e, _)| e).collect();
-            let eb: Vec<usize> = (0..3).flat_map(|k| model.dofs.expand(NODE_DOFS * b + k)).map(|(e, _)| e).collect();
-            for &r in &ea {
-                for &c in &eb {
-                    cols[r.max(c)].push(r.min(c));
-                }
-            }
+            grow::push_coupling(model, a, b, &mut cols);
         }
         let mut col_ptr = Vec::with_capacity(cols.len() + 1);
         let mut row_idx = Vec::new();

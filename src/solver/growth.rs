@@ -1,9 +1,9 @@
 //! Growth of the tangent's sparsity pattern when nodal-force terms (contact) bring node-pair
-//! blocks outside it: the pattern, the scatter maps and the symbolic analysis are rebuilt
-//! with the new couplings, and the tangent assembled so far is carried into the grown
-//! pattern instead of being assembled again. The old pattern is a sub-pattern of the grown
-//! one (`Assembler::with_couplings` only adds couplings), so every assembled entry has its
-//! place there; the entries that were outside — the only ones missing — are then added at the
+//! blocks outside it: the new couplings are merged into the pattern, the scatter maps moved
+//! to the grown pattern (`Pattern::with_pairs`, `Assembler::regrown`), the symbolic analysis
+//! redone, and the tangent assembled so far is carried into the grown pattern instead of
+//! being assembled again. The old pattern is a sub-pattern of the grown one, so every
+//! assembled entry has its place there; the entries that were outside — the only ones missing — are then added at the
 //! new positions alone, in the order a full re-assembly would add them, so the result is the
 //! same bit for bit (each entry receives the same operations in the same order).
 
@@ -13,7 +13,7 @@ use nalgebra::Matrix3;
 
 use super::linear::SparseCholesky;
 use super::newton::Solver;
-use crate::assembly::{Assembler, Pattern};
+use crate::assembly::Pattern;
 use crate::element::NODE_DOFS;
 use crate::model::Model;
 
@@ -21,35 +21,9 @@ use crate::model::Model;
 pub(super) enum Growth {
     /// The analysis of the grown pattern failed; pattern and values unchanged.
     Failed,
-    /// Grown; the assembled values could not be carried over (zeroed).
-    Rebuilt,
     /// Grown, the assembled values carried over; `fresh[s]` marks the entries of the grown
     /// pattern that the old one lacked (still zero).
     Carried { fresh: Vec<bool> },
-}
-
-/// Position in `new` of every entry of `old`, or None when `old` is not a sub-pattern of
-/// `new` (a linear merge of the sorted row lists of each column).
-fn positions(old: &Pattern, new: &Pattern) -> Option<Vec<usize>> {
-    if old.n != new.n {
-        return None;
-    }
-    let mut pos = Vec::with_capacity(old.row_idx.len());
-    for c in 0..old.n {
-        let mut q = new.col_ptr[c];
-        let end = new.col_ptr[c + 1];
-        for &r in &old.row_idx[old.col_ptr[c]..old.col_ptr[c + 1]] {
-            while q < end && new.row_idx[q] < r {
-                q += 1;
-            }
-            if q == end || new.row_idx[q] != r {
-                return None;
-            }
-            pos.push(q);
-            q += 1;
-        }
-    }
-    Some(pos)
 }
 
 /// Slot of entry (r, c), r ≤ c, in the pattern, if stored and marked in `fresh`.
@@ -95,7 +69,7 @@ impl<'m> Solver<'m> {
     /// the pattern; the tangent assembled so far is carried over and only the blocks'
     /// entries that were left out are added ([`Solver::add_fresh_blocks`]), unless the
     /// mixed-stress records are in use (they start anew with a new pattern, so the elements
-    /// are assembled again, as before) or the values cannot be carried.
+    /// are assembled again, as before).
     pub(super) fn add_nodal_tangent(&mut self, evaluation: &super::reuse::NodalEvaluation) -> NodalTangent {
         let (jacobian, pairs) = (&evaluation.jacobian, &evaluation.pairs);
         let p = &self.assembler.pattern;
@@ -114,7 +88,7 @@ impl<'m> Solver<'m> {
                 self.timings.dropped_pair_blocks += n_outside;
                 NodalTangent::Dropped
             }
-            _ => NodalTangent::Reassemble,
+            Growth::Carried { .. } => NodalTangent::Reassemble,
         }
     }
 
@@ -135,23 +109,21 @@ impl<'m> Solver<'m> {
         couplings.extend(pairs);
         couplings.sort_unstable();
         couplings.dedup();
-        let mut assembler = Assembler::with_couplings(self.model, &couplings);
+        // The couplings not yet in the pattern, merged into it (`Pattern::with_pairs`: the
+        // pattern `Assembler::with_couplings` builds with all of them).
+        let added: Vec<(usize, usize)> = couplings.iter().filter(|p| self.couplings.binary_search(p).is_err()).copied().collect();
+        let (pattern, pos) = self.assembler.pattern.with_pairs(self.model, &added);
         let threads = if self.settings.factor_threads == 0 { rayon::current_num_threads() } else { self.settings.factor_threads };
-        let grown = match SparseCholesky::analyse(&assembler.pattern, threads) {
+        let grown = match SparseCholesky::analyse(&pattern, threads) {
             Ok(cholesky) => {
-                let mut values = vec![0.0; assembler.nnz()];
-                let growth = match positions(&self.assembler.pattern, &assembler.pattern) {
-                    Some(pos) => {
-                        let mut fresh = vec![true; values.len()];
-                        for (&q, &v) in pos.iter().zip(&self.values) {
-                            values[q] = v;
-                            fresh[q] = false;
-                        }
-                        Growth::Carried { fresh }
-                    }
-                    None => Growth::Rebuilt,
-                };
-                assembler.take_over(&mut self.assembler);
+                let mut values = vec![0.0; pattern.row_idx.len()];
+                let mut fresh = vec![true; values.len()];
+                for (&q, &v) in pos.iter().zip(&self.values) {
+                    values[q] = v;
+                    fresh[q] = false;
+                }
+                let growth = Growth::Carried { fresh };
+                let assembler = self.assembler.regrown(pattern, &pos);
                 self.values = values;
                 self.assembler = assembler;
                 self.cholesky = cholesky;
@@ -183,19 +155,5 @@ impl<'m> Solver<'m> {
         for (a, b, j) in pairs.iter().filter(|(a, b, _)| outside.binary_search(&(*a, *b)).is_ok()) {
             add_node_pair_block_fresh(self.model, p, fresh, &mut self.values, *a, *b, j);
         }
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::positions;
-    use crate::assembly::Pattern;
-
-    #[test]
-    fn positions_of_a_sub_pattern() {
-        let old = Pattern { n: 3, col_ptr: vec![0, 1, 2, 4], row_idx: vec![0, 1, 0, 2] };
-        let new = Pattern { n: 3, col_ptr: vec![0, 1, 3, 6], row_idx: vec![0, 0, 1, 0, 1, 2] };
-        assert_eq!(positions(&old, &new), Some(vec![0, 2, 3, 5]));
-        assert_eq!(positions(&new, &old), None, "a larger pattern is no sub-pattern");
     }
 }
