@@ -486,6 +486,12 @@ def ron(element_size, discrete, protocol=None, name="nbc_suit", body="body"):
         w(f"// Meshed at {f(h)} m: the panels {prefix}* (--fine {prefix} {f(h)}).")
     if SIDE_BACK != 0.0:
         w(f"// Seam layout: the trunk's side seams swept back {f(SIDE_BACK)} m at their bottom (--side-back).")
+    if GUSSET_DEPTH != 0.06:
+        w(f"// Underarm gussets {f(GUSSET_DEPTH)} m deep down the arm (--gusset-depth; drafted 0.06 m).")
+    if SEAT_EASE:
+        w(f"// Seat ease: the back rise {f(SEAT_EASE)} m longer at the centre back, a seat wedge (--seat-ease).")
+    if BACK_EASE:
+        w(f"// Reach ease: each back quarter {f(BACK_EASE)} m wider across the shoulder blades (--back-ease).")
     w(f"// Element size {element_size} m (coarse).")
     w("Scene(")
     w(f'    name: "{name}",')
