@@ -20,10 +20,15 @@ left-hand ones.
 Usage: python3 garments/make_suit.py [OUT.ron] [--element-size H] [--discrete]
                                      [--protocol MOTION] [--side-back D]
                                      [--fine-underarm H] [--fine PREFIX H ...]
+                                     [--gusset-depth D] [--seat-ease S] [--back-ease E]
 (--protocol body/suit_motion.ron --fine-underarm 0.04 --fine sleeve_top_ 0.06 --fine
 sleeve_under_fore_ 0.06: the mannequin moves through that motion file after the drape, one
 step to rest per frame, with the under sleeves of the upper arms and the gussets meshed at
 4 cm and the other sleeve pieces at 6 cm: garments/nbc_suit_protocol.ron.)
+Movement ease (all 0 or the draft's own in garments/nbc_suit.ron): --gusset-depth D, the
+underarm gusset D deep down the arm (0.06 m drafted); --seat-ease S, the back rise S longer at
+the centre back (a seat wedge); --back-ease E, each back quarter E wider across the shoulder
+blades (a centre back bulge). See the comments at each.
 """
 
 import math
@@ -130,6 +135,32 @@ FINE = [(sys.argv[i + 1], float(sys.argv[i + 2])) for i, a in enumerate(sys.argv
 if FINE_UNDERARM:
     FINE = [("sleeve_under_upper_", FINE_UNDERARM), ("gusset_", FINE_UNDERARM)] + FINE
 SIDE_BACK = float(sys.argv[sys.argv.index("--side-back") + 1]) if "--side-back" in sys.argv else 0.0
+# Reach ease across the back (--back-ease E, 0 in garments/nbc_suit.ron): each back quarter's
+# centre back bulges out by E between the waist and the neck (flat at E over the shoulder
+# blades, V_BLADE), so the back is 2E wider across the blades than the body's quarters while
+# every other edge (side, armhole, shoulder, neck) keeps its length. The arms swung forward
+# 90° carry the back armhole seams ~0.1 m forward round the trunk; the skin across the back
+# stretches 13-16 % in that reach (Kirk & Ibrahim, Text. Res. J. 36, 1966), ≈ 5-6 cm of the
+# ≈ 0.38 m across-back width, and a coverall's bi-swing back or action pleats give it that room.
+# The back quarters are placed E/2 further round towards the sides, so that the two bulges do
+# not cross the centre line (placed crossing, the sewing crawled: Δt ~ 4e-5 s from the start).
+# Measured (A-pose → arms forward in 1 s, README "The NBC suit in motion"): E = 0.02 sews and
+# gets to 71 % of the arms forward (53 % without); E = 0.03 and 0.04 no longer sew (the right
+# back shoulder corner and the top sleeve's crown fold at t = 0.27 s of the 0.3 s closure).
+BACK_EASE = float(sys.argv[sys.argv.index("--back-ease") + 1]) if "--back-ease" in sys.argv else 0.0
+V_BLADE = (0.22, 0.36)        # the bulge's flat part (shoulder blades, v above the waist)
+V_BULGE = (0.06, VNB)         # where it starts (at the waist) and ends (centre back neck)
+# Seat ease (--seat-ease S, 0 in garments/nbc_suit.ron): a longer back rise. Each back quarter
+# is slashed across at the hip joint's height (V_SEAT) from the centre back to the side seam
+# and its lower part (seat and crotch) turned about the side point, so that the centre back
+# gains S, tapering to nothing at the side, while every seam keeps its length (the side edge
+# kinks at the hinge; the crotch and leg edges turn with the seat). A hip flexed by θ lengthens
+# the back over the seat by about d·θ, d the seat's distance behind the hip's flexion axis
+# (≈ 0.1 m, 0 at the side where the axis comes out): 100° of flexion in the deep squat ≈ 0.17
+# m at the centre back, a straight-legged stride or the A-pose nothing — the same wedge
+# (nothing at the side, most at the centre back) a trouser pattern's seat angle adds.
+SEAT_EASE = float(sys.argv[sys.argv.index("--seat-ease") + 1]) if "--seat-ease" in sys.argv else 0.0
+V_SEAT = HIP_Z - LUMBAR_Z     # the slash: the hip joints' height above the waist (-0.167 m)
 
 
 def trunk_left(front):
@@ -152,9 +183,24 @@ def trunk_left(front):
     if front:
         outline += [(0.0, vn)]              # 8 centre front neck
         edges.update({"neck": (7, 8), "centre": (8, 0)})
-    else:
-        outline += [(NECK_INNER, vn), (0.0, vn)]  # 8, 9
-        edges.update({"neck_outer": (7, 8), "neck_inner": (8, 9), "centre": (9, 0)})
+        return outline, edges
+    outline += [(NECK_INNER, vn), (0.0, vn)]  # 8, 9
+    edges.update({"neck_outer": (7, 8), "neck_inner": (8, 9), "centre": (9, 0)})
+    if BACK_EASE:
+        # the centre back bulge and its start at the waist
+        outline += [(-BACK_EASE, V_BLADE[1]), (-BACK_EASE, V_BLADE[0]), (0.0, V_BULGE[0])]
+    if SEAT_EASE:
+        # the seat wedge: points 0-3 turned about the side point at V_SEAT (the hinge, inserted
+        # after them) by the angle whose chord at the centre line is SEAT_EASE; the centre
+        # line's slash point and its turned image end the outline (the wedge between them)
+        hinge = (w_hem + (W - w_hem) * (V_SEAT - VB) / (VA - VB), V_SEAT)
+        a = 2.0 * math.asin(SEAT_EASE / (2.0 * hinge[0]))
+        c, s_ = math.cos(a), math.sin(a)
+        turn = lambda p: (hinge[0] + c * (p[0] - hinge[0]) - s_ * (p[1] - hinge[1]), hinge[1] + s_ * (p[0] - hinge[0]) + c * (p[1] - hinge[1]))
+        outline = [turn(p) for p in outline[:4]] + [hinge] + outline[4:] + [(0.0, V_SEAT), turn((0.0, V_SEAT))]
+        edges = {k: (i + (i >= 4), j + (j >= 4)) for k, (i, j) in edges.items()}
+        edges["side"] = (3, 5)
+        edges["centre"] = (10, 0)
     return outline, edges
 
 
@@ -166,7 +212,7 @@ bl_outline, bl_edges = trunk_left(False)
 # The back quarters: back_r runs counter-clockwise from 1 cm right of the back point to the
 # right side; drawn as the left-front shape (CB at u = 0), so back_r is that shape and
 # back_l its mirror.
-back_r = Panel("back_r", bl_outline, bl_edges, "torso.back", (-0.01, 0.0), 0.0, C_TRUNK)
+back_r = Panel("back_r", bl_outline, bl_edges, "torso.back", (-0.01 - BACK_EASE / 2, 0.0), 0.0, C_TRUNK)
 back_l = back_r.mirrored("back_l", "torso.back")
 
 # ---------------------------------------------------------------------------------------
@@ -175,7 +221,14 @@ back_l = back_r.mirrored("back_l", "torso.back")
 # cuff. Upper arm: v from the shoulder joint (negative down the arm).
 C_ARM = 0.025
 V_CAP = -0.11
-V_GUS = V_CAP - 0.06
+# The underarm gusset's depth down the arm (--gusset-depth D, 0.06 m in garments/nbc_suit.ron):
+# the top sleeve's high sides and the gusset's sides grow with it, the under sleeve and the
+# top sleeve's low sides shrink, every seam keeping its length. It adds no fabric (the sleeve's
+# girth at every level stays TOP_CAP + GUS_TOP): the gusset reaches further down the front and
+# back of the armpit, where the fabric folds as the arm swings forward, and with
+# --fine-underarm it is the finer-meshed piece there instead of the top sleeve.
+GUSSET_DEPTH = float(sys.argv[sys.argv.index("--gusset-depth") + 1]) if "--gusset-depth" in sys.argv else 0.06
+V_GUS = V_CAP - GUSSET_DEPTH
 V_EL = -(UPPER_ARM - 0.02)
 TOP_CAP = 0.365               # top sleeve's cap base width (with the gusset's top: 0.485 m round)
 # The cap: each half a steep segment up from the cap base and a shallow one (CROWN_SLOPE
@@ -380,7 +433,7 @@ for s in ("l", "r"):
 # plies in the discrete model and vanish in the laminate.
 quilting = []
 for p in (front_l, front_r, back_l, back_r):
-    us = [u for u, _ in p.outline]
+    us = [u for u, v in p.outline if not (abs(abs(u) - BACK_EASE) < 1e-12 and V_BLADE[0] <= v <= V_BLADE[1])]
     lo, hi = min(us), max(us)
     for k, v in enumerate((VB + 0.12, VB + 0.30)):
         quilting.append((f"quilt_{p.name}_{k + 1}", p.name, [(lo + 0.03, v), (hi - 0.03, v)]))
@@ -433,6 +486,12 @@ def ron(element_size, discrete, protocol=None, name="nbc_suit", body="body"):
         w(f"// Meshed at {f(h)} m: the panels {prefix}* (--fine {prefix} {f(h)}).")
     if SIDE_BACK != 0.0:
         w(f"// Seam layout: the trunk's side seams swept back {f(SIDE_BACK)} m at their bottom (--side-back).")
+    if GUSSET_DEPTH != 0.06:
+        w(f"// Underarm gussets {f(GUSSET_DEPTH)} m deep down the arm (--gusset-depth; drafted 0.06 m).")
+    if SEAT_EASE:
+        w(f"// Seat ease: the back rise {f(SEAT_EASE)} m longer at the centre back, a seat wedge (--seat-ease).")
+    if BACK_EASE:
+        w(f"// Reach ease: each back quarter {f(BACK_EASE)} m wider across the shoulder blades (--back-ease).")
     w(f"// Element size {element_size} m (coarse).")
     w("Scene(")
     w(f'    name: "{name}",')
@@ -510,7 +569,7 @@ if __name__ == "__main__":
         del args[i:i + 2]
     discrete = "--discrete" in args
     args = [a for a in args if a != "--discrete"]
-    for flag in ("--side-back", "--fine-underarm"):
+    for flag in ("--side-back", "--fine-underarm", "--back-ease", "--gusset-depth", "--seat-ease"):
         if flag in args:
             i = args.index(flag)
             del args[i:i + 2]
