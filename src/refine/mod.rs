@@ -28,100 +28,25 @@ pub mod indicator;
 pub mod map;
 pub mod size_field;
 
-use serde::{Deserialize, Serialize};
+pub use crate::scene::sequence::{RefineSpec, MAX_PASSES};
+
 use serde_json::json;
 
 use crate::analysis::{run_from, RunError, RunOptions, Start};
-use crate::input::{Locator, SceneError};
 use crate::model::{Model, State};
 use crate::results::Summary;
 use crate::scene::{MeshSpec, Scene};
 use crate::scene::BuiltScene;
 use crate::solver::{Progress, StepKind};
 
-/// `refine: Some((tolerance: T, passes: N))` of a step.
-#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
-#[serde(deny_unknown_fields)]
-pub struct RefineSpec {
-    /// Relative shape error asked for, (hκ)²/8 per element (as `Auto`'s tolerance).
-    pub tolerance: f64,
-    /// Refinement passes (solve → indicator → remesh → map → continue), default 1.
-    #[serde(default = "one")]
-    pub passes: usize,
-    /// Relax the mapped directors with the mid-surface held before continuing (as mesh
-    /// sequencing does; default false: measured without it, the Peirce strip's two passes
-    /// took 0.04 instead of 0.13 s CPU and 37 instead of 40 Newton iterations per
-    /// continuation, the sheet on the sphere 2.5 instead of 3.3 s, 146 / 348 instead of 138 /
-    /// 311 time steps / iterations, the same rest states to the reported digits).
-    #[serde(default)]
-    pub relax_directors: bool,
-}
-
-fn one() -> usize {
-    1
-}
-
 /// Largest aspect ratio a refined tensor grid may create (the 4:1 of `SizedAnnulus`).
 pub const ASPECT: f64 = 4.0;
-
-/// Most passes accepted (each may refine by 4 per direction).
-pub const MAX_PASSES: usize = 6;
 
 /// The last step's refinement request, if any.
 pub fn requested(scene: &Scene) -> Option<&RefineSpec> {
     scene.steps.last().and_then(|s| s.refine.as_ref())
 }
 
-/// Refuses `refine` where it is not defined (module doc), the field located.
-pub fn check(scene: &Scene, loc: &Locator) -> Result<(), SceneError> {
-    let last = scene.steps.len().saturating_sub(1);
-    for (k, s) in scene.steps.iter().enumerate() {
-        let Some(r) = &s.refine else { continue };
-        let field = format!("steps[{}].refine", s.name);
-        let bad = |key: &str, msg: String| Err(loc.at(Some(&s.name), Some(key), format!("{field}{}", if key == "refine" { String::new() } else { format!(".{key}") }), msg));
-        if k != last {
-            return bad("refine", "refinement continues the last step on the refined mesh: only the last step may have refine".into());
-        }
-        if !(r.tolerance.is_finite() && r.tolerance > 0.0 && r.tolerance < 0.5) {
-            return bad("tolerance", format!("expected a relative shape error between 0 and 0.5, found {}", r.tolerance));
-        }
-        if r.passes == 0 || r.passes > MAX_PASSES {
-            return bad("passes", format!("expected 1 to {MAX_PASSES} passes, found {}", r.passes));
-        }
-        match &s.kind {
-            StepKind::Static => {}
-            StepKind::Dynamic(ds) if ds.duration == 0.0 && matches!(ds.scheme, crate::solver::TimeScheme::BackwardEuler) => {}
-            _ => return bad("refine", "refinement continues a Static step or a Dynamic step to rest (backward Euler, no duration); this step is neither".into()),
-        }
-        if s.linear {
-            return bad("refine", "a linear step has no nonlinear state to continue: remove linear: true or refine".into());
-        }
-        let other = if scene.garment.is_some() {
-            Some("a garment (panels are not remeshed by refinement yet)")
-        } else if !scene.seams.is_empty() {
-            Some("seams")
-        } else if scene.imperfection.is_some() {
-            Some("an imperfection")
-        } else if scene.protocol.is_some() {
-            Some("a movement protocol")
-        } else if scene.contact.as_ref().is_some_and(|c| c.bodies.iter().any(|b| !b.motion.is_empty())) {
-            Some("a moving contact body")
-        } else if scene.contact.as_ref().is_some_and(|c| matches!(c.formulation, crate::contact::spec::ContactFormulation::AugmentedLagrangian)) {
-            Some("augmented-Lagrangian contact (its multipliers are not mapped; use formulation: Barrier())")
-        } else {
-            None
-        };
-        if let Some(what) = other {
-            return bad("refine", format!("refinement remeshes generated rectangles only; this scene has {what}"));
-        }
-        for p in &scene.parts {
-            if !matches!(p.mesh, MeshSpec::Rectangle { .. } | MeshSpec::SizedRectangle { .. } | MeshSpec::GradedRectangle { .. }) {
-                return bad("refine", format!("part {}: refinement remeshes Rectangle, SizedRectangle and GradedRectangle parts only", p.name));
-            }
-        }
-    }
-    Ok(())
-}
 
 /// Node lines (x, y) of part `p`'s grid from its nodes' reference positions, measured from the
 /// part's origin (its smallest x and y), and its extents (lx, ly).

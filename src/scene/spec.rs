@@ -382,7 +382,7 @@ pub struct StepSpec {
     /// A-posteriori refinement after this (last) step: `Some((tolerance: T, passes: N))`
     /// (`crate::refine`).
     #[serde(default)]
-    pub refine: Option<crate::refine::RefineSpec>,
+    pub refine: Option<super::sequence::RefineSpec>,
 }
 
 /// A monitored point: the node nearest to `point`, with the displacement components kept.

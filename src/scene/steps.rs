@@ -53,7 +53,7 @@ pub(super) fn plan_steps(scene: &Scene, loc: &Locator, node_sets: &BTreeMap<Stri
         return Err(loc.at(None, Some("steps"), "steps", "expected at least one step"));
     }
     super::sequence::check(scene, loc)?;
-    crate::refine::check(scene, loc)?;
+    super::sequence::check_refine(scene, loc)?;
     let mut steps = Vec::new();
     let mut current = vec![0.0; loads.len()];
     for s in &scene.steps {
