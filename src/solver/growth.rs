@@ -3,9 +3,10 @@
 //! to the grown pattern (`Pattern::with_pairs`, `Assembler::regrown`), the symbolic analysis
 //! redone, and the tangent assembled so far is carried into the grown pattern instead of
 //! being assembled again. The old pattern is a sub-pattern of the grown one, so every
-//! assembled entry has its place there; the entries that were outside — the only ones missing — are then added at the
-//! new positions alone, in the order a full re-assembly would add them, so the result is the
-//! same bit for bit (each entry receives the same operations in the same order).
+//! assembled entry has its place there; the entries that were outside — the only ones
+//! missing — are then added at the new positions alone, in the order a full re-assembly would
+//! add them, so the result is the same bit for bit (each entry receives the same operations
+//! in the same order).
 
 use std::time::Instant;
 
