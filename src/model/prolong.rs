@@ -55,6 +55,16 @@ pub fn grid_weights(coarse: (usize, usize), fine: (usize, usize)) -> Vec<Vec<(us
     out
 }
 
+/// The displacement Σ w_a u_a and the director frame of the normalised Σ w_a d_a (first
+/// tangent from Σ w_a t1_a) of `state` at the nodes and weights `w`; None where the directors
+/// cancel (a folded state).
+pub fn interpolate(state: &State, w: &[(usize, f64)]) -> Option<(Vector3<f64>, DirectorFrame)> {
+    let u: Vector3<f64> = w.iter().map(|&(a, x)| state.u[a] * x).sum();
+    let d: Vector3<f64> = w.iter().map(|&(a, x)| state.frames[a].d * x).sum();
+    let t1: Vector3<f64> = w.iter().map(|&(a, x)| state.frames[a].t1 * x).sum();
+    (d.norm() > 1e-8).then(|| (u, DirectorFrame::new(d, Some(t1))))
+}
+
 /// The state of `fine` interpolated from `state` of `coarse`, part by part (`parts` pairs the
 /// coarse and fine grid of each part; nodes of other parts keep the fine reference state):
 /// displacements bilinearly, directors bilinearly and normalised, each frame's first
@@ -74,14 +84,9 @@ pub fn prolong(coarse: &Model, state: &State, fine: &Model, parts: &[(GridPart, 
         for (k, w) in grid_weights((c.nx, c.ny), (f.nx, f.ny)).into_iter().enumerate() {
             let n = fp.first_node + k;
             let w: Vec<(usize, f64)> = w.into_iter().map(|(a, x)| (cp.first_node + a, x)).collect();
-            let u: Vector3<f64> = w.iter().map(|&(a, x)| state.u[a] * x).sum();
-            let d: Vector3<f64> = w.iter().map(|&(a, x)| state.frames[a].d * x).sum();
-            let t1: Vector3<f64> = w.iter().map(|&(a, x)| state.frames[a].t1 * x).sum();
-            if !(d.norm() > 1e-8) {
-                return Err(format!("part {}: the coarse directors round fine node {k} cancel (folded coarse state)", fp.name));
-            }
+            let (u, frame) = interpolate(state, &w).ok_or_else(|| format!("part {}: the coarse directors round fine node {k} cancel (folded coarse state)", fp.name))?;
             out.u[n] = u;
-            out.frames[n] = DirectorFrame::new(d, Some(t1));
+            out.frames[n] = frame;
             weights[n] = w;
         }
     }

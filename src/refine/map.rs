@@ -28,7 +28,7 @@
 
 use nalgebra::{Matrix2, Vector2, Vector3};
 
-use crate::element::DirectorFrame;
+use crate::model::prolong::interpolate;
 use crate::model::{Model, State};
 
 /// Pattern-space coordinates of every node of a model: the reference position's (x, y) for
@@ -191,17 +191,12 @@ pub fn map_state(old: &Model, state: &State, old_pattern: &[[f64; 2]], new: &Mod
             let (e, xi, eta) = locator.locate(new_pattern[n]).ok_or_else(|| format!("part {}: node {n} of the new mesh is in no quad of the old one", np.name))?;
             let nw = shape(xi, eta);
             let w: Vec<(usize, f64)> = old.elements[e].nodes.iter().zip(nw).filter(|&(_, x)| x != 0.0).map(|(&a, x)| (a, x)).collect();
-            let u: Vector3<f64> = w.iter().map(|&(a, x)| state.u[a] * x).sum();
-            let d: Vector3<f64> = w.iter().map(|&(a, x)| state.frames[a].d * x).sum();
-            let t1: Vector3<f64> = w.iter().map(|&(a, x)| state.frames[a].t1 * x).sum();
-            if !(d.norm() > 1e-8) {
-                return Err(format!("part {}: the old directors round new node {n} cancel (a folded element)", np.name));
-            }
+            let (u, frame) = interpolate(state, &w).ok_or_else(|| format!("part {}: the old directors round new node {n} cancel (a folded element)", np.name))?;
             // Phong correction (module doc): Σ N_a ((x_a − p)·n_a) n_a / 2 about p = Σ N_a x_a.
             let p: Vector3<f64> = old_reference_at(old, &w) + u;
             let lift: Vector3<f64> = w.iter().map(|&(a, x)| normals[a] * (x * (old.position(state, a) - p).dot(&normals[a]))).sum();
             out.u[n] = p + lift * PHONG_ALPHA - new.x0[n];
-            out.frames[n] = DirectorFrame::new(d, Some(t1));
+            out.frames[n] = frame;
             weights[n] = w;
         }
     }
@@ -220,7 +215,7 @@ pub fn nodal_normals(model: &Model, state: &State) -> Vec<Vector3<f64>> {
     let mut n = vec![Vector3::zeros(); model.n_nodes()];
     for e in &model.elements {
         let x = e.nodes.map(|a| model.position(state, a));
-        let c = (x[2] - x[0]).cross(&(x[3] - x[1]));
+        let c = crate::mesh::quad_normal(&x);
         for &a in &e.nodes {
             n[a] += c;
         }
