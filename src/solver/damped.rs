@@ -18,7 +18,6 @@ impl<'m> Solver<'m> {
     /// step kind); same convergence tests as the plain Newton `attempt`.
     pub(super) fn attempt_damped(&mut self, state: &mut State, scales: &[f64], progress: &mut dyn FnMut(usize, f64)) -> Attempt {
         let n = self.model.dofs.n_free;
-        let col_ptr = self.assembler.pattern.col_ptr.clone();
         let mut r = vec![0.0; n];
         let mut du = vec![0.0; n];
         let mut residuals = Vec::new();
@@ -50,7 +49,9 @@ impl<'m> Solver<'m> {
                     return Attempt::Converged { iterations: it, residuals, indefinite, energy };
                 }
             }
-            // Shift until K + μD is positive definite.
+            // Shift until K + μD is positive definite. (The pattern is read here, not once per
+            // increment: a contact term's trial state may have grown it.)
+            let col_ptr = self.assembler.pattern.col_ptr.clone();
             let base_values = self.values.clone();
             let diag: Vec<f64> = (0..n).map(|c| base_values[col_ptr[c + 1] - 1].abs()).collect();
             let floor = 1e-12 * diag.iter().sum::<f64>() / n.max(1) as f64;
@@ -88,7 +89,16 @@ impl<'m> Solver<'m> {
             let base = state.clone();
             let (base_f_int, base_f_ext) = (self.f_int.clone(), self.f_ext.clone());
             let (pi0, rel0) = (self.potential(state, scales, energy).unwrap_or(f64::NAN), rel);
-            self.model.update(state, &du, 1.0);
+            // Barrier terms: no further than the collision-free fraction of the correction
+            // (continuous collision detection), so that no trial state tunnels through a
+            // surface (a state carried across whole would see no barrier at all).
+            let mut fraction = 1.0f64;
+            if self.nodal_forces.iter().any(|c| c.is_barrier()) {
+                let mut full = base.clone();
+                self.model.update(&mut full, &du, 1.0);
+                fraction = self.nodal_forces.iter().map(|c| c.max_step(self.model, &base, &full)).fold(1.0, f64::min);
+            }
+            self.model.update(state, &du, fraction);
             let trial = self.assemble(state, scales, true);
             let accept = match &trial {
                 Ok(e) => {
@@ -104,9 +114,17 @@ impl<'m> Solver<'m> {
                 after_rejection = false;
             } else {
                 *state = base;
-                self.values = base_values;
-                self.f_int = base_f_int;
-                self.f_ext = base_f_ext;
+                if self.values.len() == base_values.len() {
+                    self.values = base_values;
+                    self.f_int = base_f_int;
+                    self.f_ext = base_f_ext;
+                } else {
+                    // The trial grew the pattern (new contact couplings): the base state's
+                    // tangent is assembled again, into the grown pattern.
+                    if let Err(f) = self.assemble(state, scales, true) {
+                        return failed(it, &residuals, Some(f.element), f.to_string());
+                    }
+                }
                 mu = (mu * 10.0).max(1e-4);
                 after_rejection = true;
                 if mu > 1e12 {
