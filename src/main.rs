@@ -148,11 +148,13 @@ enum Command {
     },
     /// Solve a garment scene at increasing fidelity (mesh levels × laminate / Auto / discrete plies)
     /// and report each run's time and error against the finest discrete model: table, JSON
-    /// and error-vs-time plot.
+    /// and error-vs-time plot. A scene without a garment: its sized parts (SizedAnnulus,
+    /// SizedRectangle) at the mesh levels.
     Study {
-        /// Scene file (RON) with a garment.
+        /// Scene file (RON) with a garment or sized parts.
         scene: PathBuf,
-        /// Output directory (study.md, study.json, study.svg).
+        /// Output directory (study.md, study.json, study.svg; study_drape.svg where the
+        /// scene measures a drape coefficient).
         #[arg(long, default_value = "out/study")]
         out: PathBuf,
         /// Element size multipliers (comma-separated); the smallest is the reference mesh.

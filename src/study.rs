@@ -5,7 +5,9 @@
 //! (RMS and largest distance between the deformed garment surfaces / garment size), seam
 //! forces, clearance to the bodies, drape coefficient where the scene measures it. Writes a
 //! Markdown table, JSON records and an error-against-time SVG, as `plyshell bench` does for
-//! the verification benchmarks.
+//! the verification benchmarks. A scene of generated parts instead of a garment (the Cusick
+//! specimen) is studied over the element size of its sized parts (`SizedAnnulus`,
+//! `SizedRectangle`), every node counting for the shape error.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -20,7 +22,7 @@ use crate::analysis::{self, RunOptions};
 use crate::garment::{ElementSize, PlyModel};
 use crate::io::plot::{plot_xy, Series};
 use crate::results::Summary;
-use crate::scene::{self, BuiltScene, Scene};
+use crate::scene::{self, BuiltScene, MeshSpec, Scene};
 
 /// What to vary.
 #[derive(Clone, Debug)]
@@ -107,7 +109,8 @@ struct Surface {
 impl Surface {
     fn new(built: &BuiltScene, positions: &[[f64; 3]]) -> Self {
         let points: Vec<Vector3<f64>> = positions.iter().map(|p| Vector3::new(p[0], p[1], p[2])).collect();
-        let garment = |n: usize| built.garment.as_ref().is_some_and(|l| l.pattern_uv.get(n).copied().flatten().is_some());
+        // The garment's nodes; every node of a scene of generated parts (no garment).
+        let garment = |n: usize| built.garment.as_ref().is_none_or(|l| l.pattern_uv.get(n).copied().flatten().is_some());
         let nodes: Vec<usize> = (0..points.len()).filter(|&n| garment(n)).collect();
         let tris: Vec<[u32; 3]> = built
             .model
@@ -201,10 +204,10 @@ fn clearance(built: &BuiltScene, surface: &Surface) -> Option<(f64, f64)> {
 }
 
 /// A scene variant: the garment's element size scaled by `m` (or the `Auto` tolerance
-/// `tol`), its ply model set (panel overrides cleared).
+/// `tol`), its ply model set (panel overrides cleared); without a garment, the element size
+/// of every sized part (`SizedAnnulus`, `SizedRectangle`) the same way.
 fn variant(scene: &Scene, m: Option<f64>, tol: Option<f64>, ply: PlyModel) -> Result<Scene, String> {
     let mut s = scene.clone();
-    let g = s.garment.as_mut().ok_or("the scene has no garment to study")?;
     let scale = |e: &ElementSize| -> ElementSize {
         match (e, m, tol) {
             (_, _, Some(t)) => ElementSize::Auto(match e {
@@ -215,6 +218,14 @@ fn variant(scene: &Scene, m: Option<f64>, tol: Option<f64>, ply: PlyModel) -> Re
             (ElementSize::Auto(a), Some(m), None) => ElementSize::Auto(crate::garment::AutoSize { tolerance: a.tolerance * m * m, ..a.clone() }),
             (e, None, None) => e.clone(),
         }
+    };
+    let Some(g) = s.garment.as_mut() else {
+        for p in &mut s.parts {
+            if let MeshSpec::SizedAnnulus { element_size, .. } | MeshSpec::SizedRectangle { element_size, .. } = &mut p.mesh {
+                *element_size = scale(element_size);
+            }
+        }
+        return Ok(s);
     };
     g.element_size = scale(&g.element_size);
     for p in &mut g.panels {
@@ -271,7 +282,12 @@ struct Timing {
 /// The row of a solved variant (errors against the reference not yet filled; an `Auto`
 /// run's choices from its summary) and its deformed surface.
 fn measured_run(label: &str, ply: PlyModel, mesh: String, built: &BuiltScene, summary: &Summary, status: String, timing: Timing) -> Run {
-    let element_size = built.garment.as_ref().map(|l| l.part_element_size.iter().flatten().copied().filter(|&h| h > 0.0).fold([f64::INFINITY, 0.0], |a, h| [a[0].min(h), a[1].max(h)])).unwrap_or([0.0; 2]);
+    let extent = |sizes: &mut dyn Iterator<Item = f64>| sizes.filter(|&h| h > 0.0).fold([f64::INFINITY, 0.0], |a, h| [a[0].min(h), a[1].max(h)]);
+    // Target sizes of the garment's panels; the square root of the element areas of parts.
+    let element_size = match &built.garment {
+        Some(l) => extent(&mut l.part_element_size.iter().flatten().copied()),
+        None => extent(&mut (0..built.model.elements.len()).map(|e| built.model.element(e).reference_area().sqrt())),
+    };
     let surface = Surface::new(built, &summary.final_positions);
     let clear = clearance(built, &surface);
     let drape = summary.extra.get("drape").and_then(|d| d.get("drape_coefficient_percent")).and_then(|v| v.as_f64());
@@ -351,8 +367,15 @@ pub fn run_study(path: &Path, options: &StudyOptions, log: &mut dyn FnMut(&str))
     let text = scene::decode(&file, bytes).map_err(|e| e.to_string())?;
     let text = scene::strip_bom(&text).to_string();
     let base = scene::parse(&file, &text).map_err(|e| e.to_string())?;
-    let g = base.garment.as_ref().ok_or_else(|| format!("{file}: the scene has no garment to study"))?;
-    let multi_ply = g.panels.iter().any(|p| p.plies.len() > 1);
+    // A garment, or generated parts whose size the study can vary (a single shell each: no
+    // ply models).
+    let sized = |p: &crate::scene::PartSpec| matches!(p.mesh, MeshSpec::SizedAnnulus { .. } | MeshSpec::SizedRectangle { .. });
+    let multi_ply = match &base.garment {
+        Some(g) => g.panels.iter().any(|p| p.plies.len() > 1),
+        None if base.parts.iter().any(sized) => false,
+        None => return Err(format!("{file}: the scene has no garment and no sized part (SizedAnnulus, SizedRectangle) to study")),
+    };
+    let parts_only = base.garment.is_none();
     let mut sizes = options.sizes.clone();
     if sizes.is_empty() || sizes.iter().any(|m| !(m.is_finite() && *m > 0.0)) {
         return Err(format!("study: expected positive size multipliers, found {sizes:?}"));
@@ -365,21 +388,23 @@ pub fn run_study(path: &Path, options: &StudyOptions, log: &mut dyn FnMut(&str))
     let finest = sizes[sizes.len() - 1];
     let plies: Vec<PlyModel> = if multi_ply { options.ply_models.clone() } else { vec![PlyModel::Discrete] };
     std::fs::create_dir_all(&options.out).map_err(|e| format!("{}: {e}", options.out.display()))?;
+    // Run labels: ply model and mesh level ("discrete h×2"); the mesh level alone for parts.
+    let label = |p: PlyModel, mesh: &str| if parts_only { mesh.to_string() } else { format!("{} {mesh}", ply_name(p)) };
     let mut plan: Vec<(String, String, Option<f64>, Option<f64>, PlyModel)> = Vec::new();
     for &m in &sizes {
         for &p in &plies {
             if m == finest && p == PlyModel::Discrete {
                 continue;
             }
-            plan.push((format!("{} h×{m}", ply_name(p)), format!("h×{m}"), Some(m), None, p));
+            plan.push((label(p, &format!("h×{m}")), format!("h×{m}"), Some(m), None, p));
         }
     }
     for &t in &options.tolerances {
         for &p in &plies {
-            plan.push((format!("{} auto {t}", ply_name(p)), format!("auto {t}"), None, Some(t), p));
+            plan.push((label(p, &format!("auto {t}")), format!("auto {t}"), None, Some(t), p));
         }
     }
-    plan.push((format!("discrete h×{finest} (reference)"), format!("h×{finest}"), Some(finest), None, PlyModel::Discrete));
+    plan.push((format!("{} (reference)", label(PlyModel::Discrete, &format!("h×{finest}"))), format!("h×{finest}"), Some(finest), None, PlyModel::Discrete));
     // A variant that cannot be built (e.g. a stitch line passing no node of a coarse mesh)
     // is a failed row; the reference must build.
     let n_plan = plan.len();
@@ -489,7 +514,7 @@ fn write_reports(dir: &Path, scene: &str, rows: &[StudyRow]) -> Result<(), Strin
     let json = serde_json::to_vec_pretty(&serde_json::json!({ "scene": scene, "runs": rows })).map_err(|e| e.to_string())?;
     crate::io::atomic::write_atomic(&dir.join("study.json"), &json).map_err(|e| format!("study.json: {e}"))?;
     let mut series: Vec<Series> = Vec::new();
-    for (name, pick) in [("laminate", "laminate h"), ("Auto plies", "auto h"), ("discrete", "discrete h"), ("laminate, Auto size", "laminate auto"), ("Auto plies, Auto size", "auto auto"), ("discrete, Auto size", "discrete auto")] {
+    for (name, pick) in [("uniform refinement", "h×"), ("Auto size", "auto 0."), ("laminate", "laminate h"), ("Auto plies", "auto h"), ("discrete", "discrete h"), ("laminate, Auto size", "laminate auto"), ("Auto plies, Auto size", "auto auto"), ("discrete, Auto size", "discrete auto")] {
         let points: Vec<(f64, f64)> = rows.iter().filter(|r| r.label.starts_with(pick) && r.shape_rms > 0.0 && r.wall_s > 0.0).map(|r| (r.wall_s, 100.0 * r.shape_rms)).collect();
         if !points.is_empty() {
             series.push(Series { name: name.into(), points, reference: false });
@@ -497,6 +522,12 @@ fn write_reports(dir: &Path, scene: &str, rows: &[StudyRow]) -> Result<(), Strin
     }
     if !series.is_empty() {
         plot_xy(&dir.join("study.svg"), &format!("study: {scene}"), "wall time (s)", "shape RMS error (% of garment size)", &series, true, true).map_err(|e| format!("study.svg: {e}"))?;
+    }
+    // Where the scene measures a drape coefficient: its error (points) against wall time too.
+    let drape: Vec<(f64, f64)> = rows.iter().filter_map(|r| r.drape_error.filter(|e| *e != 0.0 && r.wall_s > 0.0).map(|e| (r.wall_s, e.abs()))).collect();
+    if !drape.is_empty() {
+        let series = [Series { name: "runs".into(), points: drape, reference: false }];
+        plot_xy(&dir.join("study_drape.svg"), &format!("study: {scene}"), "wall time (s)", "drape coefficient error (points)", &series, true, true).map_err(|e| format!("study_drape.svg: {e}"))?;
     }
     Ok(())
 }

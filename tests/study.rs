@@ -36,3 +36,45 @@ fn study_of_a_two_ply_flap_writes_a_table_with_a_zero_error_reference() {
     assert_eq!(json["runs"].as_array().map(|a| a.len()), Some(4));
     let _ = std::fs::remove_dir_all(&out);
 }
+
+/// `plyshell study` on a scene of generated parts (no garment): the element size of its
+/// sized part is varied (`SizedRectangle`, fixed size × m and an `Auto` tolerance); rows are
+/// labelled by mesh level alone (a part is one shell: no ply models); the reference has zero
+/// error and the coarser runs a finite, positive one. The scene: a 20 cm × 2 cm cotton strip
+/// clamped at one end, sagging under its weight (a Peirce cantilever), static.
+#[test]
+fn study_of_a_sized_part_varies_its_element_size() {
+    let text = r#"Scene(
+    name: "strip",
+    materials: {"fabric": Fabric((preset: Some("cotton_broadcloth")))},
+    parts: [(name: "strip", mesh: SizedRectangle(lx: 0.2, ly: 0.02, element_size: 0.01), material: "fabric", thickness: 0.3e-3)],
+    node_sets: {"root": Edge(part: "strip", edge: "xmin")},
+    boundary: [Clamp(set: "root")],
+    loads: {"weight": SelfWeight(part: "strip", g: (0.0, 0.0, -9.81))},
+    steps: [(name: "sag", increments: 4, scale: {"weight": 1.0})],
+    output: (vtu: false),
+)"#;
+    let dir = std::env::temp_dir().join(format!("plyshell_study_part_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let path = dir.join("strip.ron");
+    std::fs::write(&path, text).expect("scene written");
+    let out = dir.join("out");
+    let options = StudyOptions { sizes: vec![4.0, 1.0], tolerances: vec![0.05], ply_models: vec![PlyModel::Laminate, PlyModel::Discrete], out: out.clone(), vtu: false };
+    let rows = run_study(&path, &options, &mut |m| println!("{m}")).unwrap_or_else(|e| panic!("{e}"));
+    println!("{}", plyshell::study::markdown("strip", &rows));
+    let labels: Vec<&str> = rows.iter().map(|r| r.label.as_str()).collect();
+    assert_eq!(labels, ["h×4", "auto 0.05", "h×1 (reference)"]);
+    assert!(rows.iter().all(|r| r.status == "completed"), "{labels:?}");
+    assert_eq!((rows[2].shape_rms, rows[2].shape_max), (0.0, 0.0));
+    assert!(rows[0].dofs < rows[2].dofs, "{} vs {} DOFs", rows[0].dofs, rows[2].dofs);
+    // A part's element size is the square root of its elements' areas: the reference grid
+    // (⌈l/h⌉ elements per side) has 1 cm squares.
+    assert!((rows[2].element_size[0] - 0.01).abs() < 1e-9 && (rows[2].element_size[1] - 0.01).abs() < 1e-9, "{:?}", rows[2].element_size);
+    for r in &rows[..2] {
+        assert!(r.shape_rms > 0.0 && r.shape_max >= r.shape_rms && r.shape_max < 0.5, "{}: {} {}", r.label, r.shape_rms, r.shape_max);
+    }
+    // The finer Auto mesh is closer to the reference than the coarse one (mesh convergence).
+    assert!(rows[1].dofs > rows[0].dofs && rows[1].shape_rms < rows[0].shape_rms, "{} vs {}", rows[1].shape_rms, rows[0].shape_rms);
+    assert!(out.join("study.md").is_file() && out.join("study.json").is_file() && out.join("study.svg").is_file());
+    let _ = std::fs::remove_dir_all(&dir);
+}
