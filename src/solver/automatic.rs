@@ -37,6 +37,15 @@ impl Solver<'_> {
     /// and a failed one — stopped early when divergence shows ([`Solver::attempt`]) — is
     /// retried at a quarter of its size. Every converged increment is reported; the step ends
     /// exactly at its target scales. Returns the scales reached.
+    ///
+    /// Where plain Newton would give up — the increment cut `max_cutbacks` times in a model
+    /// supported against every rigid motion (not a mechanism: a limit or bifurcation point
+    /// passed, wrinkling, plies sliding over each other, contact's round-off) —
+    /// the rest of the step runs damped Newton (the `StaticDamped` iteration, Levenberg–
+    /// Marquardt, [`Solver::attempt_damped`]) from the step's first increment size, before
+    /// the step is given up. Measured: a two-ply flap hanging under its weight with barrier
+    /// inter-ply contact stopped at 42 % of its load with the increment cut to 2.7·10⁻⁷ of
+    /// the step (residual at 10⁻⁷–10⁻⁶ for 30 iterations); with the fallback it completes.
     #[allow(clippy::too_many_arguments)]
     pub(super) fn run_automatic(
         &mut self,
@@ -51,7 +60,10 @@ impl Solver<'_> {
         let at = |tau: f64| -> Vec<f64> { start.iter().zip(&step.target_scales).map(|(a, b)| a + tau * (b - a)).collect() };
         let clock0 = self.clock;
         let mut tau = 0.0f64;
-        let mut dtau = 1.0 / step.increments.max(1) as f64;
+        let first_dtau = 1.0 / step.increments.max(1) as f64;
+        let mut dtau = first_dtau;
+        // Damped Newton for the rest of the step (the fallback above).
+        let mut damped = false;
         let min_dtau = dtau * 0.25f64.powi(self.settings.max_cutbacks as i32);
         let mut inc = 0;
         let mut iterations = 0;
@@ -75,17 +87,25 @@ impl Solver<'_> {
             self.begin_nodal_increment((next - tau) * step.increments.max(1) as f64);
             self.begin_nodal_motion(step.static_clock(clock0, next), state);
             force_scale.0 = if converged > 0 { force_sum / converged as f64 } else { 0.0 };
-            match self.attempt(state, &trial_scales, false, Some(&mut force_scale), &mut report_progress) {
+            let outcome = if damped {
+                self.attempt_damped(state, &trial_scales, &mut report_progress)
+            } else {
+                self.attempt(state, &trial_scales, false, Some(&mut force_scale), &mut report_progress)
+            };
+            match outcome {
                 Attempt::Converged { iterations: its, residuals, indefinite: ind, energy } => {
-                    force_sum += force_scale.1;
-                    converged += 1;
+                    if !damped {
+                        force_sum += force_scale.1;
+                        converged += 1;
+                    }
                     iterations += its;
                     indefinite |= ind;
                     tau = next;
                     inc += 1;
                     self.commit_nodal_forces(state);
                     let stability = self.stability_at(state, start, &step.target_scales, tracker);
-                    let report = self.static_report(si, step, inc, tau, &trial_scales, (iterations, residuals, cutbacks, indefinite, energy), stability);
+                    let mut report = self.static_report(si, step, inc, tau, &trial_scales, (iterations, residuals, cutbacks, indefinite, energy), stability);
+                    report.damped = damped;
                     on_increment(&report, state, self);
                     if tau >= 1.0 {
                         return Ok(trial_scales);
@@ -107,6 +127,11 @@ impl Solver<'_> {
                     iterations += iteration;
                     cutbacks += 1;
                     dtau *= 0.25;
+                    if dtau < min_dtau * (1.0 - 1e-9) && !damped && super::diagnose::unsupported_directions(self.model).is_empty() {
+                        damped = true;
+                        dtau = first_dtau;
+                        continue;
+                    }
                     if dtau < min_dtau * (1.0 - 1e-9) {
                         let cause = super::diagnose::explain(self.model, state, &cause, indefinite || self.cholesky.kind() == FactorKind::Ldlt);
                         let cause = format!("{cause}; automatic increment cut to {:.3e} of the step (max_cutbacks = {} quarterings of the first)", dtau * 4.0, self.settings.max_cutbacks);

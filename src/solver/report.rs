@@ -59,6 +59,11 @@ pub struct IncrementReport {
     /// Time-integration data of a `Dynamic` step (None for static steps).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub dynamics: Option<DynamicInfo>,
+    /// Whether this static increment was solved by damped (Levenberg–Marquardt) Newton: a
+    /// `StaticDamped` step, or a `Static` step that fell back to it (see
+    /// `Solver::run_automatic`).
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub damped: bool,
 }
 
 /// Progress notification for a bar.
