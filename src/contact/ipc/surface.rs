@@ -66,6 +66,7 @@ use crate::solver::NodalForces;
 
 mod candidates;
 mod pairs;
+mod trial;
 
 /// Initial κ_a d̂_a / w_a (as for rigid bodies).
 const INITIAL_STIFFNESS: f64 = 10.0;
@@ -150,6 +151,8 @@ struct Term {
     mollified: Option<Box<Derivative>>,
     gap: f64,
     dhat: f64,
+    /// Mollifier threshold (edge–edge), 0 for point–triangle.
+    eps: f64,
     /// Thickness of the thinner ply of the pair.
     thin: f64,
     energy: f64,
@@ -197,7 +200,7 @@ pub struct SurfaceContact {
     /// Reference constants per candidate pair (None: excluded), filled as pairs come near.
     constants: RwLock<FxMap<(Kind, usize, usize), Option<Constants>>>,
     last: Vec<Term>,
-    /// Friction terms of the last evaluation (without Hessians).
+    /// Friction terms of the last evaluation.
     last_friction: Vec<FrictionTerm>,
     /// Contact nodes' displacements at the last evaluation.
     last_u: Vec<Vector3<f64>>,
@@ -205,6 +208,8 @@ pub struct SurfaceContact {
     /// `last_u`) and their gaps there: the start of the next collision-detection sweep.
     /// Each gap with whether it was measured (else a lower bound, `StartGaps`).
     start_gaps: Option<(Arc<Vec<Pair>>, Vec<(f64, bool)>)>,
+    /// The last trial state of the energy line search, kept for its assembly (`trial.rs`).
+    trial: Option<trial::Trial>,
     /// Buffer of the per-feature barrier derivatives (`barrier_derivatives`).
     derivatives: Vec<Derivative>,
     /// The last sweep's gaps at its start (see [`StartGaps`]).
@@ -359,6 +364,7 @@ impl SurfaceContact {
             last_friction: Vec::new(),
             last_u: Vec::new(),
             start_gaps: None,
+            trial: None,
             derivatives: Vec::new(),
             start: Mutex::new(None),
             bound_margin,
@@ -417,12 +423,21 @@ impl NodalForces for SurfaceContact {
         let t = Instant::now();
         let x = |a: usize| model.x0[a] + state.u[a];
         let candidates = self.candidates_at(&x);
-        let mut gaps = self.start_gaps.take().map(|g| g.1).unwrap_or_default();
-        let skip = self.inactive_by_bound(&candidates, &x);
-        let terms = self.evaluate_pairs(&candidates, &x, true, skip.as_deref(), Some(&mut gaps));
-        // Kept for the collision detection of the step from this state (`max_step`).
-        self.start_gaps = Some((candidates, gaps));
-        let fr = self.friction_terms(&x, true);
+        let (terms, fr) = match self.take_trial(state, &candidates, &x) {
+            // A trial state of the line search, measured by `potential_at`.
+            Some(trial) => {
+                self.start_gaps = Some((candidates, trial.gaps));
+                (trial.terms, trial.friction)
+            }
+            None => {
+                let mut gaps = self.start_gaps.take().map(|g| g.1).unwrap_or_default();
+                let skip = self.inactive_by_bound(&candidates, &x);
+                let terms = self.evaluate_pairs(&candidates, &x, true, skip.as_deref(), Some(&mut gaps));
+                // Kept for the collision detection of the step from this state (`max_step`).
+                self.start_gaps = Some((candidates, gaps));
+                (terms, self.friction_terms(&x, true))
+            }
+        };
         self.search_s += t.elapsed().as_secs_f64();
         let mut pot = 0.0;
         let mut blocks = Blocks::default();
@@ -466,7 +481,7 @@ impl NodalForces for SurfaceContact {
         // (b, a): pushing 2J once for a < b gives J at (a, b) and Jᵀ at (b, a).
         pairs.extend(blocks.off.into_iter().map(|((a, b), j)| (a, b, j * 2.0)));
         self.last = terms;
-        self.last_friction = fr.into_iter().map(|f| FrictionTerm { k: None, ..f }).collect();
+        self.last_friction = fr;
         self.last_u = self.points.iter().map(|&a| state.u[a]).collect();
         self.last_potential = pot;
         if let Ok(mut tm) = self.timings.lock() {
@@ -492,30 +507,7 @@ impl NodalForces for SurfaceContact {
     /// (`last`, used by `commit`) is left alone.
     fn potential_at(&mut self, model: &Model, state: &State) -> Option<f64> {
         let t = Instant::now();
-        let x = |a: usize| model.x0[a] + state.u[a];
-        // The active pairs' energies alone, in the order of `evaluate`'s terms (an indexed
-        // collect, summed in order below).
-        let pairs = self.candidates_at(&x);
-        let skip = self.inactive_by_bound(&pairs, &x);
-        let mut energies: Vec<Option<f64>> = Vec::new();
-        pairs
-            .par_iter()
-            .enumerate()
-            .map(|(i, (kind, _, nodes, c))| if skip.as_ref().is_some_and(|s| !s[i].is_nan()) { None } else { self.pair_energy(*kind, nodes, &nodes.map(x), c) })
-            .collect_into_vec(&mut energies);
-        let fr = self.friction_terms(&x, false);
-        self.search_s += t.elapsed().as_secs_f64();
-        let mut pot = 0.0;
-        for energy in energies.into_iter().flatten() {
-            if !energy.is_finite() {
-                pot = f64::INFINITY;
-                continue;
-            }
-            pot += energy;
-        }
-        for ft in &fr {
-            pot += ft.energy;
-        }
+        let pot = self.trial_potential(model, state);
         if let Ok(mut tm) = self.timings.lock() {
             tm.evaluate += t.elapsed().as_secs_f64();
         }
@@ -598,6 +590,7 @@ impl NodalForces for SurfaceContact {
     /// (the last Newton iterate, bit for bit), else evaluated anew.
     fn commit(&mut self, model: &Model, state: &State) -> Option<serde_json::Value> {
         let t = Instant::now();
+        self.forget_trial();
         let x = |a: usize| model.x0[a] + state.u[a];
         let same = self.last_u.len() == self.points.len() && self.points.iter().zip(&self.last_u).all(|(&a, u)| state.u[a] == *u);
         let (terms, fr) = if same {
