@@ -422,20 +422,31 @@ impl NodalForces for SurfaceContact {
     fn add_coupled(&mut self, model: &Model, state: &State, f_ext: &mut [f64], jacobian: &mut Vec<(usize, Matrix3<f64>)>, pairs: &mut Vec<(usize, usize, Matrix3<f64>)>) {
         let t = Instant::now();
         let x = |a: usize| model.x0[a] + state.u[a];
-        let candidates = self.candidates_at(&x);
-        let (terms, fr) = match self.take_trial(state, &candidates, &x) {
-            // A trial state of the line search, measured by `potential_at`.
-            Some(trial) => {
-                self.start_gaps = Some((candidates, trial.gaps));
-                (trial.terms, trial.friction)
-            }
-            None => {
-                let mut gaps = self.start_gaps.take().map(|g| g.1).unwrap_or_default();
-                let skip = self.inactive_by_bound(&candidates, &x);
-                let terms = self.evaluate_pairs(&candidates, &x, true, skip.as_deref(), Some(&mut gaps));
-                // Kept for the collision detection of the step from this state (`max_step`).
-                self.start_gaps = Some((candidates, gaps));
-                (terms, self.friction_terms(&x, true))
+        let same = |a: &Vector3<f64>, b: &Vector3<f64>| a.iter().zip(b.iter()).all(|(p, q)| p.to_bits() == q.to_bits());
+        let again = self.last_u.len() == self.points.len() && self.points.iter().zip(&self.last_u).all(|(&a, u)| same(&state.u[a], u));
+        let (terms, fr) = if again {
+            // The state of the last evaluation again, with κ and the friction anchors as they
+            // were (a commit clears `last_u`): the tangent projected onto the PSD cone
+            // (`project_hessians`, 351 of the 5 cm NBC hood's 1525 iterations). Its pairs and
+            // friction terms do not depend on the projection; only their derivatives are
+            // formed again.
+            (std::mem::take(&mut self.last), std::mem::take(&mut self.last_friction))
+        } else {
+            let candidates = self.candidates_at(&x);
+            match self.take_trial(state, &candidates, &x) {
+                // A trial state of the line search, measured by `potential_at`.
+                Some(trial) => {
+                    self.start_gaps = Some((candidates, trial.gaps));
+                    (trial.terms, trial.friction)
+                }
+                None => {
+                    let mut gaps = self.start_gaps.take().map(|g| g.1).unwrap_or_default();
+                    let skip = self.inactive_by_bound(&candidates, &x);
+                    let terms = self.evaluate_pairs(&candidates, &x, true, skip.as_deref(), Some(&mut gaps));
+                    // Kept for the collision detection of the step from this state (`max_step`).
+                    self.start_gaps = Some((candidates, gaps));
+                    (terms, self.friction_terms(&x, true))
+                }
             }
         };
         self.search_s += t.elapsed().as_secs_f64();
