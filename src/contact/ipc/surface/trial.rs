@@ -2,7 +2,7 @@
 //! first is judged by its potential alone (`NodalForces::potential_at`), and the one it
 //! accepts is then assembled in full at the very same state. The trial's measured pairs
 //! (closest features, gaps, energies, normals, weights) and friction terms are kept for that
-//! assembly, which then only differentiates them: on the NBC sleeve on the arm 275 of the
+//! assembly, which then only differentiates them: on the NBC sleeve on the arm 274 of the
 //! 1014 evaluations with derivatives are such accepted trials.
 
 use std::sync::Arc;
