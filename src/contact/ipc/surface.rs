@@ -210,8 +210,10 @@ pub struct SurfaceContact {
     start_gaps: Option<(Arc<Vec<Pair>>, Vec<(f64, bool)>)>,
     /// The last trial state of the energy line search, kept for its assembly (`trial.rs`).
     trial: Option<trial::Trial>,
-    /// Buffer of the per-feature barrier derivatives (`barrier_derivatives`).
+    /// Buffer of the per-feature barrier derivatives (`barrier_derivatives`), and whether it
+    /// holds the exact (not projected) ones of the terms `last`.
     derivatives: Vec<Derivative>,
+    derivatives_exact: bool,
     /// The last sweep's gaps at its start (see [`StartGaps`]).
     start: Mutex<Option<StartGaps>>,
     /// Absolute part of the [`StartGaps`] margin: 10⁻⁵ of four times the longest reference
@@ -231,20 +233,6 @@ pub struct SurfaceContact {
     pub increments: Vec<SurfaceIncrement>,
 }
 
-fn find(rep: &mut [usize], a: usize) -> usize {
-    let mut r = a;
-    while rep[r] != r {
-        r = rep[r];
-    }
-    let mut b = a;
-    while rep[b] != r {
-        let next = rep[b];
-        rep[b] = r;
-        b = next;
-    }
-    r
-}
-
 impl SurfaceContact {
     /// Surface contact of `setup.parts` of `model`.
     pub fn new(model: &Model, setup: &SurfaceSetup) -> Self {
@@ -254,13 +242,13 @@ impl SurfaceContact {
         for t in &model.dofs.ties {
             let s = t.slave / NODE_DOFS;
             for m in t.masters.iter().map(|&(m, _)| m / NODE_DOFS).chain(t.links.iter().map(|&(m, _)| m)) {
-                let (a, b) = (find(&mut rep, s), find(&mut rep, m));
+                let (a, b) = (candidates::find(&mut rep, s), candidates::find(&mut rep, m));
                 if a != b {
                     rep[a.max(b)] = a.min(b);
                 }
             }
         }
-        let rep: Vec<usize> = (0..n).map(|a| find(&mut rep, a)).collect();
+        let rep: Vec<usize> = (0..n).map(|a| candidates::find(&mut rep, a)).collect();
         let mut part_of = vec![usize::MAX; n];
         let mut half = vec![0.0f64; n];
         let mut area = vec![0.0f64; n];
@@ -366,6 +354,7 @@ impl SurfaceContact {
             start_gaps: None,
             trial: None,
             derivatives: Vec::new(),
+            derivatives_exact: false,
             start: Mutex::new(None),
             bound_margin,
             point_index,
@@ -465,7 +454,11 @@ impl NodalForces for SurfaceContact {
             // By reference: a derivative is 1.3 KB, and moving each out of the list cost
             // more than adding it.
             let mut derivatives = std::mem::take(&mut self.derivatives);
-            self.barrier_derivatives(&terms, &x, &mut derivatives);
+            // The same terms again (see above): their exact derivatives, when kept, again.
+            if !(again && self.derivatives_exact) {
+                self.barrier_derivatives(&terms, &x, &mut derivatives);
+            }
+            self.derivatives_exact = !self.project;
             if self.project {
                 derivatives.par_iter_mut().for_each(Derivative::project_hessian);
             }
@@ -482,6 +475,8 @@ impl NodalForces for SurfaceContact {
                 }
             }
             self.derivatives = derivatives;
+        } else {
+            self.derivatives_exact = false;
         }
         for ft in &fr {
             pot += ft.energy;
