@@ -10,4 +10,5 @@ mod report;
 mod settings;
 pub mod surface;
 
+pub(crate) use potential::FxMap;
 pub use surface::{attach, SurfaceContact, SurfaceIncrement, SurfaceSettings, SurfaceSetup, SurfaceTimings};

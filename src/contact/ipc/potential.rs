@@ -31,7 +31,7 @@ use crate::element::NODE_DOFS;
 /// Multiply-rotate hash for small integer keys (the Fx hash of the Rust compiler): node
 /// numbers need no protection against collisions chosen by an adversary.
 #[derive(Default, Clone, Copy)]
-pub(super) struct FxHasher(u64);
+pub(crate) struct FxHasher(u64);
 
 impl Hasher for FxHasher {
     fn finish(&self) -> u64 {
@@ -54,7 +54,7 @@ impl Hasher for FxHasher {
 }
 
 /// A `HashMap` with [`FxHasher`].
-pub(super) type FxMap<K, V> = HashMap<K, V, BuildHasherDefault<FxHasher>>;
+pub(crate) type FxMap<K, V> = HashMap<K, V, BuildHasherDefault<FxHasher>>;
 
 /// The closest feature of a pair by its global node numbers, in a canonical order (the
 /// distance of each kind is symmetric in the orders it forgets).

@@ -66,6 +66,7 @@ use crate::solver::NodalForces;
 
 mod candidates;
 mod pairs;
+mod trial;
 
 /// Initial κ_a d̂_a / w_a (as for rigid bodies).
 const INITIAL_STIFFNESS: f64 = 10.0;
@@ -150,6 +151,8 @@ struct Term {
     mollified: Option<Box<Derivative>>,
     gap: f64,
     dhat: f64,
+    /// Mollifier threshold (edge–edge), 0 for point–triangle.
+    eps: f64,
     /// Thickness of the thinner ply of the pair.
     thin: f64,
     energy: f64,
@@ -197,7 +200,7 @@ pub struct SurfaceContact {
     /// Reference constants per candidate pair (None: excluded), filled as pairs come near.
     constants: RwLock<FxMap<(Kind, usize, usize), Option<Constants>>>,
     last: Vec<Term>,
-    /// Friction terms of the last evaluation (without Hessians).
+    /// Friction terms of the last evaluation.
     last_friction: Vec<FrictionTerm>,
     /// Contact nodes' displacements at the last evaluation.
     last_u: Vec<Vector3<f64>>,
@@ -205,8 +208,12 @@ pub struct SurfaceContact {
     /// `last_u`) and their gaps there: the start of the next collision-detection sweep.
     /// Each gap with whether it was measured (else a lower bound, `StartGaps`).
     start_gaps: Option<(Arc<Vec<Pair>>, Vec<(f64, bool)>)>,
-    /// Buffer of the per-feature barrier derivatives (`barrier_derivatives`).
+    /// The last trial state of the energy line search, kept for its assembly (`trial.rs`).
+    trial: Option<trial::Trial>,
+    /// Buffer of the per-feature barrier derivatives (`barrier_derivatives`), and whether it
+    /// holds the exact (not projected) ones of the terms `last`.
     derivatives: Vec<Derivative>,
+    derivatives_exact: bool,
     /// The last sweep's gaps at its start (see [`StartGaps`]).
     start: Mutex<Option<StartGaps>>,
     /// Absolute part of the [`StartGaps`] margin: 10⁻⁵ of four times the longest reference
@@ -226,20 +233,6 @@ pub struct SurfaceContact {
     pub increments: Vec<SurfaceIncrement>,
 }
 
-fn find(rep: &mut [usize], a: usize) -> usize {
-    let mut r = a;
-    while rep[r] != r {
-        r = rep[r];
-    }
-    let mut b = a;
-    while rep[b] != r {
-        let next = rep[b];
-        rep[b] = r;
-        b = next;
-    }
-    r
-}
-
 impl SurfaceContact {
     /// Surface contact of `setup.parts` of `model`.
     pub fn new(model: &Model, setup: &SurfaceSetup) -> Self {
@@ -249,13 +242,13 @@ impl SurfaceContact {
         for t in &model.dofs.ties {
             let s = t.slave / NODE_DOFS;
             for m in t.masters.iter().map(|&(m, _)| m / NODE_DOFS).chain(t.links.iter().map(|&(m, _)| m)) {
-                let (a, b) = (find(&mut rep, s), find(&mut rep, m));
+                let (a, b) = (candidates::find(&mut rep, s), candidates::find(&mut rep, m));
                 if a != b {
                     rep[a.max(b)] = a.min(b);
                 }
             }
         }
-        let rep: Vec<usize> = (0..n).map(|a| find(&mut rep, a)).collect();
+        let rep: Vec<usize> = (0..n).map(|a| candidates::find(&mut rep, a)).collect();
         let mut part_of = vec![usize::MAX; n];
         let mut half = vec![0.0f64; n];
         let mut area = vec![0.0f64; n];
@@ -359,7 +352,9 @@ impl SurfaceContact {
             last_friction: Vec::new(),
             last_u: Vec::new(),
             start_gaps: None,
+            trial: None,
             derivatives: Vec::new(),
+            derivatives_exact: false,
             start: Mutex::new(None),
             bound_margin,
             point_index,
@@ -416,13 +411,33 @@ impl NodalForces for SurfaceContact {
     fn add_coupled(&mut self, model: &Model, state: &State, f_ext: &mut [f64], jacobian: &mut Vec<(usize, Matrix3<f64>)>, pairs: &mut Vec<(usize, usize, Matrix3<f64>)>) {
         let t = Instant::now();
         let x = |a: usize| model.x0[a] + state.u[a];
-        let candidates = self.candidates_at(&x);
-        let mut gaps = self.start_gaps.take().map(|g| g.1).unwrap_or_default();
-        let skip = self.inactive_by_bound(&candidates, &x);
-        let terms = self.evaluate_pairs(&candidates, &x, true, skip.as_deref(), Some(&mut gaps));
-        // Kept for the collision detection of the step from this state (`max_step`).
-        self.start_gaps = Some((candidates, gaps));
-        let fr = self.friction_terms(&x, true);
+        let same = |a: &Vector3<f64>, b: &Vector3<f64>| a.iter().zip(b.iter()).all(|(p, q)| p.to_bits() == q.to_bits());
+        let again = self.last_u.len() == self.points.len() && self.points.iter().zip(&self.last_u).all(|(&a, u)| same(&state.u[a], u));
+        let (terms, fr) = if again {
+            // The state of the last evaluation again, with κ and the friction anchors as they
+            // were (a commit clears `last_u`): the tangent projected onto the PSD cone
+            // (`project_hessians`, 351 of the 5 cm NBC hood's 1525 iterations). Its pairs and
+            // friction terms do not depend on the projection; only their derivatives are
+            // formed again.
+            (std::mem::take(&mut self.last), std::mem::take(&mut self.last_friction))
+        } else {
+            let candidates = self.candidates_at(&x);
+            match self.take_trial(state, &candidates, &x) {
+                // A trial state of the line search, measured by `potential_at`.
+                Some(trial) => {
+                    self.start_gaps = Some((candidates, trial.gaps));
+                    (trial.terms, trial.friction)
+                }
+                None => {
+                    let mut gaps = self.start_gaps.take().map(|g| g.1).unwrap_or_default();
+                    let skip = self.inactive_by_bound(&candidates, &x);
+                    let terms = self.evaluate_pairs(&candidates, &x, true, skip.as_deref(), Some(&mut gaps));
+                    // Kept for the collision detection of the step from this state (`max_step`).
+                    self.start_gaps = Some((candidates, gaps));
+                    (terms, self.friction_terms(&x, true))
+                }
+            }
+        };
         self.search_s += t.elapsed().as_secs_f64();
         let mut pot = 0.0;
         let mut blocks = Blocks::default();
@@ -439,7 +454,11 @@ impl NodalForces for SurfaceContact {
             // By reference: a derivative is 1.3 KB, and moving each out of the list cost
             // more than adding it.
             let mut derivatives = std::mem::take(&mut self.derivatives);
-            self.barrier_derivatives(&terms, &x, &mut derivatives);
+            // The same terms again (see above): their exact derivatives, when kept, again.
+            if !(again && self.derivatives_exact) {
+                self.barrier_derivatives(&terms, &x, &mut derivatives);
+            }
+            self.derivatives_exact = !self.project;
             if self.project {
                 derivatives.par_iter_mut().for_each(Derivative::project_hessian);
             }
@@ -456,6 +475,8 @@ impl NodalForces for SurfaceContact {
                 }
             }
             self.derivatives = derivatives;
+        } else {
+            self.derivatives_exact = false;
         }
         for ft in &fr {
             pot += ft.energy;
@@ -466,7 +487,7 @@ impl NodalForces for SurfaceContact {
         // (b, a): pushing 2J once for a < b gives J at (a, b) and Jᵀ at (b, a).
         pairs.extend(blocks.off.into_iter().map(|((a, b), j)| (a, b, j * 2.0)));
         self.last = terms;
-        self.last_friction = fr.into_iter().map(|f| FrictionTerm { k: None, ..f }).collect();
+        self.last_friction = fr;
         self.last_u = self.points.iter().map(|&a| state.u[a]).collect();
         self.last_potential = pot;
         if let Ok(mut tm) = self.timings.lock() {
@@ -492,30 +513,7 @@ impl NodalForces for SurfaceContact {
     /// (`last`, used by `commit`) is left alone.
     fn potential_at(&mut self, model: &Model, state: &State) -> Option<f64> {
         let t = Instant::now();
-        let x = |a: usize| model.x0[a] + state.u[a];
-        // The active pairs' energies alone, in the order of `evaluate`'s terms (an indexed
-        // collect, summed in order below).
-        let pairs = self.candidates_at(&x);
-        let skip = self.inactive_by_bound(&pairs, &x);
-        let mut energies: Vec<Option<f64>> = Vec::new();
-        pairs
-            .par_iter()
-            .enumerate()
-            .map(|(i, (kind, _, nodes, c))| if skip.as_ref().is_some_and(|s| !s[i].is_nan()) { None } else { self.pair_energy(*kind, nodes, &nodes.map(x), c) })
-            .collect_into_vec(&mut energies);
-        let fr = self.friction_terms(&x, false);
-        self.search_s += t.elapsed().as_secs_f64();
-        let mut pot = 0.0;
-        for energy in energies.into_iter().flatten() {
-            if !energy.is_finite() {
-                pot = f64::INFINITY;
-                continue;
-            }
-            pot += energy;
-        }
-        for ft in &fr {
-            pot += ft.energy;
-        }
+        let pot = self.trial_potential(model, state);
         if let Ok(mut tm) = self.timings.lock() {
             tm.evaluate += t.elapsed().as_secs_f64();
         }
@@ -598,6 +596,7 @@ impl NodalForces for SurfaceContact {
     /// (the last Newton iterate, bit for bit), else evaluated anew.
     fn commit(&mut self, model: &Model, state: &State) -> Option<serde_json::Value> {
         let t = Instant::now();
+        self.forget_trial();
         let x = |a: usize| model.x0[a] + state.u[a];
         let same = self.last_u.len() == self.points.len() && self.points.iter().zip(&self.last_u).all(|(&a, u)| state.u[a] == *u);
         let (terms, fr) = if same {

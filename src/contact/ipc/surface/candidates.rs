@@ -13,6 +13,22 @@ use super::super::potential::FxMap;
 use super::super::primitives::squared_distance_value;
 use super::{Constants, Kind, Near, Pair, SurfaceContact, MOLLIFIER};
 
+/// The representative of node `a` in the union–find forest `rep` (the nodes joined by ties),
+/// compressing the path to it.
+pub(super) fn find(rep: &mut [usize], a: usize) -> usize {
+    let mut r = a;
+    while rep[r] != r {
+        r = rep[r];
+    }
+    let mut b = a;
+    while rep[b] != r {
+        let next = rep[b];
+        rep[b] = r;
+        b = next;
+    }
+    r
+}
+
 impl SurfaceContact {
     /// Whether point `i` and triangle `t` may form a pair (not excluded: same quad, a shared
     /// or tied node, or the same part without self contact).

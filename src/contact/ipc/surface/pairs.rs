@@ -10,7 +10,7 @@ use rayon::prelude::*;
 
 use super::super::potential::{mollified_derivative, FeatureKey, Scalar};
 use super::super::primitives::{edge_edge_feature, mollifier, point_triangle_feature, squared_distance_value, Feature};
-use super::{Constants, Kind, Pair, SurfaceContact, Term};
+use super::{Kind, Pair, SurfaceContact, Term};
 use crate::contact::barrier::barrier;
 use crate::model::{Model, State};
 
@@ -72,24 +72,6 @@ impl SurfaceContact {
         Some(out)
     }
 
-    /// The energy κ_p m_p b(d, d̂_p) of one candidate pair on `nodes` at positions `xs`, as
-    /// [`SurfaceContact::evaluate`] forms it (the same operations, the same value to the bit):
-    /// None when inactive (gap ≥ d̂), infinite at or through zero gap.
-    pub(super) fn pair_energy(&self, kind: Kind, nodes: &[usize; 4], xs: &[Vector3<f64>; 4], c: &Constants) -> Option<f64> {
-        let (feat, _) = Self::feature(kind, xs);
-        let gap = squared_distance_value(feat, xs).sqrt() - c.offset;
-        if gap >= c.dhat {
-            return None;
-        }
-        if gap <= 0.0 {
-            return Some(f64::INFINITY);
-        }
-        let kap = nodes.iter().map(|&a| self.kappa[a]).sum::<f64>() / 4.0;
-        let (b, _, _) = barrier(gap, c.dhat);
-        let m = parallel_mollifier(kind, xs, c.eps).unwrap_or(1.0);
-        Some(kap * b * m)
-    }
-
     /// The active pairs at `state` (gap below d̂): gap, energy κ_p m_p b(d, d̂_p), normal force
     /// and closest-point weights, with the energy's first two derivatives in the distance of
     /// the pair's closest feature (summed per feature and differentiated in the nodes by
@@ -132,7 +114,7 @@ impl SurfaceContact {
             let thin = 2.0 * nodes.iter().map(|&a| self.half[a]).fold(f64::INFINITY, f64::min);
             let feature = FeatureKey::of(feat, &nodes);
             let inf = Scalar { e: f64::INFINITY, e1: 0.0, e2: 0.0 };
-            let mut term = Term { kind, key, nodes, feature, scalar: inf, mollified: None, gap, dhat: c.dhat, thin, energy: f64::INFINITY, force: f64::INFINITY, normal, weights };
+            let mut term = Term { kind, key, nodes, feature, scalar: inf, mollified: None, gap, dhat: c.dhat, eps: c.eps, thin, energy: f64::INFINITY, force: f64::INFINITY, normal, weights };
             if gap <= 0.0 {
                 return Some(term);
             }
@@ -196,7 +178,7 @@ impl SurfaceContact {
 /// The edge–edge mollifier m(|e_a × e_b|²) of a nearly parallel edge pair (IPC, Li et al.
 /// 2020 §4.4): Some(m) when `kind` is edge–edge and |e_a × e_b|² < `eps`, else None (m = 1).
 #[inline]
-fn parallel_mollifier(kind: Kind, xs: &[Vector3<f64>; 4], eps: f64) -> Option<f64> {
+pub(super) fn parallel_mollifier(kind: Kind, xs: &[Vector3<f64>; 4], eps: f64) -> Option<f64> {
     if kind != Kind::EdgeEdge {
         return None;
     }

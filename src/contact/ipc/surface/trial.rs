@@ -1,0 +1,86 @@
+//! The energy line search's trial states (see the parent module doc): a trial after the
+//! first is judged by its potential alone (`NodalForces::potential_at`), and the one it
+//! accepts is then assembled in full at the very same state. The trial's measured pairs
+//! (closest features, gaps, energies, normals, weights) and friction terms are kept for that
+//! assembly, which then only differentiates them: on the NBC sleeve on the arm 274 of the
+//! 1014 evaluations with derivatives are such accepted trials.
+
+use std::sync::Arc;
+use std::time::Instant;
+
+use nalgebra::Vector3;
+use rayon::prelude::*;
+
+use super::super::friction::FrictionTerm;
+use super::super::potential::{mollified_derivative, Scalar};
+use super::pairs::parallel_mollifier;
+use super::{Pair, SurfaceContact, Term};
+use crate::contact::barrier::barrier;
+use crate::model::{Model, State};
+
+/// One trial state's evaluation without derivatives, kept for an assembly of that state.
+pub(super) struct Trial {
+    /// The contact nodes' displacements at the trial.
+    u: Vec<Vector3<f64>>,
+    /// Its candidates, their gaps (measured, or lower bounds) and its active pairs.
+    pub(super) pairs: Arc<Vec<Pair>>,
+    pub(super) gaps: Vec<(f64, bool)>,
+    pub(super) terms: Vec<Term>,
+    /// Friction terms, with their Hessians.
+    pub(super) friction: Vec<FrictionTerm>,
+}
+
+impl SurfaceContact {
+    /// The barrier and friction energies at `state` summed as `add_coupled` sums them (the
+    /// same value, bit for bit: the same terms in the same order), without the barrier's
+    /// gradients and Hessians; infinite at a pair through zero gap. The pairs and friction
+    /// terms are kept for an assembly of this state ([`SurfaceContact::take_trial`]).
+    pub(super) fn trial_potential(&mut self, model: &Model, state: &State) -> f64 {
+        let t = Instant::now();
+        let x = |a: usize| model.x0[a] + state.u[a];
+        let pairs = self.candidates_at(&x);
+        let skip = self.inactive_by_bound(&pairs, &x);
+        let mut gaps = Vec::new();
+        let terms = self.evaluate_pairs(&pairs, &x, false, skip.as_deref(), Some(&mut gaps));
+        let friction = self.friction_terms(&x, true);
+        self.search_s += t.elapsed().as_secs_f64();
+        let mut pot = 0.0;
+        for term in &terms {
+            if !term.energy.is_finite() {
+                pot = f64::INFINITY;
+                continue;
+            }
+            pot += term.energy;
+        }
+        for ft in &friction {
+            pot += ft.energy;
+        }
+        let u = self.points.iter().map(|&a| state.u[a]).collect();
+        self.trial = Some(Trial { u, pairs, gaps, terms, friction });
+        pot
+    }
+
+    /// The kept trial when `state` is bit for bit its state and `pairs` its candidates, with
+    /// the mollified edge–edge pairs' derivatives added to its terms (what
+    /// `evaluate_pairs` with derivatives computes); None otherwise. The kept trial is
+    /// forgotten either way.
+    pub(super) fn take_trial(&mut self, state: &State, pairs: &Arc<Vec<Pair>>, x: &(dyn Fn(usize) -> Vector3<f64> + Sync)) -> Option<Trial> {
+        let same = |a: &Vector3<f64>, b: &Vector3<f64>| a.iter().zip(b.iter()).all(|(p, q)| p.to_bits() == q.to_bits());
+        let mut trial = self.trial.take().filter(|t| Arc::ptr_eq(&t.pairs, pairs) && t.u.len() == self.points.len() && self.points.iter().zip(&t.u).all(|(&a, u)| same(&state.u[a], u)))?;
+        trial.terms.par_iter_mut().filter(|t| t.energy.is_finite() && t.gap > 0.0).for_each(|term| {
+            let xs = term.nodes.map(x);
+            if parallel_mollifier(term.kind, &xs, term.eps).is_some() {
+                let kap = term.nodes.iter().map(|&a| self.kappa[a]).sum::<f64>() / 4.0;
+                let (b, b1, b2) = barrier(term.gap, term.dhat);
+                let f = Scalar { e: kap * b, e1: kap * b1, e2: kap * b2 };
+                term.mollified = Some(Box::new(mollified_derivative(&term.nodes, &term.feature, &f, term.eps, x)));
+            }
+        });
+        Some(trial)
+    }
+
+    /// Forgets the kept trial (κ or the friction anchors changed).
+    pub(super) fn forget_trial(&mut self) {
+        self.trial = None;
+    }
+}
