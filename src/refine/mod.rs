@@ -5,9 +5,10 @@
 //! size field from it (`size_field`: h (T/η)^{1/2}, clamped to [h/4, 2h], graded ≤ 25 %),
 //! remeshes the parts with it (`GradedRectangle` tensor grids), maps the state onto the new
 //! mesh (`map`: point location and inverse bilinear interpolation in pattern space; then the
-//! barrier push-out of mesh sequencing, `analysis_sequence`, and on request its director
-//! relaxation) and
-//! continues the last step to rest there. Elements whose indicator is below T grow (at
+//! barrier push-out of mesh sequencing, `analysis_sequence`, on request its director
+//! relaxation, and the membrane relaxation of `relax`, which removes the interpolated state's
+//! O(h²) membrane mismatch) and continues the last step to rest there (`relax::stage`
+//! without the spring, then time steps from Δt = 10 τ). Elements whose indicator is below T grow (at
 //! most ×2 per pass), so flat regions coarsen.
 //!
 //! What can be refined: scenes whose parts are all `Rectangle`, `SizedRectangle` or
@@ -18,14 +19,16 @@
 //! mesher driven by a sampled field) are not remeshed yet.
 //!
 //! `summary.json` gets `refinement` (per pass: elements before/after, marked for
-//! refinement, coarsened, DOFs, the mapped state's relative static residual before
-//! continuing, time steps, Newton iterations, CPU seconds) and the output directory
+//! refinement, coarsened, DOFs, the mapped state's relative static residual after
+//! interpolation and after the relaxations, the relaxation and descent stages, time steps,
+//! Newton iterations, CPU seconds) and the output directory
 //! `NAME_refinement.vtu`: the final state with cell data `indicator` (η at the final
 //! state), `element_size` (the size the indicator asks for there, min over directions)
 //! and `element_extent` (the element's pattern extents along X and Y).
 
 pub mod indicator;
 pub mod map;
+pub mod relax;
 pub mod size_field;
 
 pub use crate::scene::sequence::{RefineSpec, MAX_PASSES};
@@ -119,11 +122,11 @@ fn plan(model: &Model, state: &State, tolerance: f64) -> Result<(Plan, Vec<indic
 
 /// The scene on the refined grids `lines`, continuing its last step from a mapped rest state:
 /// only that step, `refine` cleared; a `Static` step becomes a `Dynamic` step to rest with
-/// the default settings (its loads are already on, and the mapped state carries a mapping
-/// mismatch — membrane strain of the lifted chords, shear of the interpolated directors —
-/// whose forces exceed fabric's weight by orders: a static Newton from there turned a
-/// director by > 1 rad in its first correction on the Peirce strip, the pseudo-transient
-/// step relaxes it in ~15 time steps). The rest state is the same static equilibrium.
+/// the default settings (its loads are already on; from the interpolated state, whose
+/// membrane mismatch exceeds fabric's weight by orders, a static Newton turned a director by
+/// > 1 rad in its first correction on the Peirce strip; `run` relaxes that mismatch first,
+/// `relax`, and starts the time steps at Δt = 10 τ). The rest state is the same static
+/// equilibrium.
 fn refined_scene(scene: &Scene, lines: &[(Vec<f64>, Vec<f64>, f64, f64)]) -> Scene {
     let mut s = scene.clone();
     for (p, (x, y, lx, ly)) in s.parts.iter_mut().zip(lines) {
@@ -192,11 +195,10 @@ pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &m
         let old = current.as_ref().map_or(&built.model, |c| &c.1.model);
         let (pl, _) = plan(old, &state, spec.tolerance).map_err(fail)?;
         let sc = refined_scene(scene, &pl.lines);
-        let b = build_refined(&sc, built)?;
-        let new = &b.model;
-        let (mut mapped, weights) = map::map_state(old, &state, &map::pattern_of(old), new, &map::pattern_of(new)).map_err(fail)?;
+        let mut b = build_refined(&sc, built)?;
+        let (mut mapped, weights) = map::map_state(old, &state, &map::pattern_of(old), &b.model, &map::pattern_of(&b.model)).map_err(fail)?;
         let (pushed, _, min_gap) = match &b.contact {
-            Some(c) => crate::analysis_sequence::push_out(old, &state, new, &mut mapped, &weights, c),
+            Some(c) => crate::analysis_sequence::push_out(old, &state, &b.model, &mut mapped, &weights, c),
             None => (0, 0.0, f64::INFINITY),
         };
         if min_gap <= 0.0 {
@@ -204,14 +206,30 @@ pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &m
         }
         let residual_mapped = crate::analysis_sequence::mapped_residual(&sc, &b, &mut mapped).map_err(fail)?;
         let relaxation = if spec.relax_directors { crate::analysis_sequence::relax_directors(&sc, &b, &mut mapped).map_err(fail)? } else { (0, 0) };
+        // Membrane-consistent mapping (`relax`): one proximal stage with the normal spring.
+        let cpu_relax = crate::study::cpu_seconds();
+        let membrane = if spec.relax_membrane { Some(relax::stage(&sc, &b, &mut mapped, Some(relax::TAU_S)).map_err(fail)?) } else { None };
         let residual = crate::analysis_sequence::mapped_residual(&sc, &b, &mut mapped).map_err(fail)?;
+        let cpu_relax = crate::study::cpu_seconds() - cpu_relax;
         let last = pass == spec.passes;
         let scales = b.steps.last().map(|s| s.target_scales.clone()).unwrap_or_default();
         let old_scales = match &current { Some(c) => c.1.steps.last(), None => built.steps.last() }.map(|s| s.target_scales.clone()).unwrap_or_default();
         let pi_before = potential(old, &state, &old_scales);
-        let pi_mapped = potential(new, &mapped, &scales);
+        let pi_mapped = potential(&b.model, &mapped, &scales);
+        // The continuation: the minimisation without the spring (skipped if it does not
+        // converge in one solve), then the step to rest from Δt = 10 τ (the default first
+        // step's ramp, 1 ms × 1.5ᵏ, is what the relaxed state no longer needs).
+        let cpu_descent = crate::study::cpu_seconds();
+        let relaxed = membrane.as_ref().is_some_and(|m| m.failed.is_none());
+        let descent = if relaxed { Some(relax::stage(&sc, &b, &mut mapped, None).map_err(fail)?) } else { None };
+        let cpu_descent = crate::study::cpu_seconds() - cpu_descent;
+        if relaxed
+            && let Some(StepKind::Dynamic(ds)) = b.steps.last_mut().map(|s| &mut s.kind)
+        {
+            ds.dt = ds.dt.max(relax::CONTINUATION_DT_FACTOR * relax::TAU_S);
+        }
         let report = json!({
-            "pass": pass, "elements_before": old.elements.len(), "elements": new.elements.len(),
+            "pass": pass, "elements_before": old.elements.len(), "elements": b.model.elements.len(),
             "marked": pl.marked, "coarsened": pl.coarsened,
             "grids": pl.lines.iter().map(|l| format!("{}x{}", l.0.len() - 1, l.1.len() - 1)).collect::<Vec<_>>(),
             "nodes_pushed_out": pushed,
@@ -220,6 +238,10 @@ pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &m
             "potential_before_j": pi_before,
             "potential_mapped_j": pi_mapped,
             "director_relaxation": { "time_steps": relaxation.0, "newton_iterations": relaxation.1 },
+            "membrane_relaxation": membrane.as_ref().map(|m| relax::report(Some(relax::TAU_S), m)),
+            "membrane_relaxation_cpu_s": cpu_relax,
+            "descent": descent.as_ref().map(|d| relax::report(None, d)),
+            "descent_cpu_s": cpu_descent,
         });
         let out = if last { options.clone() } else { RunOptions::default() };
         let mut summary = run_from(&sc, &b, &out, Some(Start { state: mapped, report: json!(null) }), progress).map_err(|e| match e {
@@ -233,7 +255,7 @@ pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &m
         report["newton_iterations"] = json!(summary.newton_iterations);
         report["cpu_s"] = json!(crate::study::cpu_seconds() - cpu);
         if let Some(rest) = summary.final_state.as_ref() {
-            report["potential_rest_j"] = json!(potential(new, rest, &scales));
+            report["potential_rest_j"] = json!(potential(&b.model, rest, &scales));
         }
         passes.push(report);
         state = summary.final_state.clone().ok_or_else(|| fail("the continued solve kept no final state".into()))?;

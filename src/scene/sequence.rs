@@ -129,6 +129,15 @@ pub struct RefineSpec {
     /// 311 time steps / iterations, the same rest states to the reported digits).
     #[serde(default)]
     pub relax_directors: bool,
+    /// Relax the mapped state's membrane before continuing (`refine::relax`: proximal Newton
+    /// stages with a normal spring; default true). False continues from the interpolated
+    /// state (the behaviour before; for comparison).
+    #[serde(default = "yes")]
+    pub relax_membrane: bool,
+}
+
+fn yes() -> bool {
+    true
 }
 
 fn one() -> usize {
