@@ -180,6 +180,29 @@ fn refined_peirce_strip_matches_the_fine_mesh_with_fewer_dofs() {
     assert!(err(tc, tr) < 3e-4, "coarsened tip {tc:?} vs {tr:?}");
 }
 
+/// A refined step continues under the load scales the steps before it left (they carry over
+/// from step to step): the strip hung in a first step and refined on a second that changes
+/// no load ends where the one-step refinement does (the same 11 × 4 mesh; measured equal
+/// to 10⁻¹⁶ m), not back at the unloaded flat strip (as it did when the earlier steps' scales
+/// were dropped with them: tip at 10⁻¹⁹ m).
+#[test]
+fn refinement_keeps_the_load_scales_of_earlier_steps() {
+    let run = |text: String| {
+        let (sc, b) = built(&text);
+        analysis::run(&sc, &b, &Default::default(), &mut |_| {}).unwrap_or_else(|e| panic!("{e}"))
+    };
+    let one = run(strip(8, 2, "Some((tolerance: 0.01, passes: 1))"));
+    let two = run(strip(8, 2, "None").replace(
+        "refine: None)]",
+        r#"refine: None), (name: "hold", increments: 1, scale: {}, refine: Some((tolerance: 0.01, passes: 1)))]"#,
+    ));
+    let (t1, t2) = (tip(&one), tip(&two));
+    println!("one step: tip {t1:?}, {} DOFs; hung then refined on a second step: tip {t2:?}, {} DOFs", one.sizes.dofs, two.sizes.dofs);
+    assert_eq!(one.sizes.dofs, two.sizes.dofs);
+    assert!(t2.1 < -0.09, "the weight was dropped: tip {t2:?}");
+    assert!((t1.0 - t2.0).hypot(t1.1 - t2.1) < 1e-6, "{t1:?} vs {t2:?}");
+}
+
 /// The mapping's own error: the Peirce strip at rest on a uniform n × 2 grid mapped onto
 /// 2n × 2 (Phong-lifted bilinear interpolation). The mapped state is not an equilibrium of the
 /// finer mesh (the lifted chords stretch by ≈ (hκ)²/24 against a membrane 10⁴ times stiffer

@@ -121,7 +121,7 @@ fn plan(model: &Model, state: &State, tolerance: f64) -> Result<(Plan, Vec<indic
 }
 
 /// The scene on the refined grids `lines`, continuing its last step from a mapped rest state:
-/// only that step, `refine` cleared; a `Static` step becomes a `Dynamic` step to rest with
+/// only that step, with the load scales the steps before it left, `refine` cleared; a `Static` step becomes a `Dynamic` step to rest with
 /// the default settings (its loads are already on; from the interpolated state, whose
 /// membrane mismatch exceeds fabric's weight by orders, a static Newton turned a director by
 /// > 1 rad in its first correction on the Peirce strip; `run` relaxes that mismatch first,
@@ -133,7 +133,16 @@ fn refined_scene(scene: &Scene, lines: &[(Vec<f64>, Vec<f64>, f64, f64)]) -> Sce
         p.mesh = MeshSpec::GradedRectangle { lx: *lx, ly: *ly, x: x.clone(), y: y.clone() };
     }
     let last = s.steps.len().saturating_sub(1);
+    // Load scales carry over from step to step (`scene::steps`): the kept step gets those of
+    // the steps dropped before it, its own last.
+    let mut scale = std::collections::BTreeMap::new();
+    for st in &s.steps {
+        scale.extend(st.scale.iter().map(|(k, v)| (k.clone(), *v)));
+    }
     s.steps.drain(..last);
+    if let Some(st) = s.steps.first_mut() {
+        st.scale = scale.into_iter().collect();
+    }
     for st in &mut s.steps {
         st.refine = None;
         st.increments = 1;
