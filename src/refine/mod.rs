@@ -12,11 +12,12 @@
 //! most ×2 per pass), so flat regions coarsen.
 //!
 //! What can be refined: scenes whose parts are all `Rectangle`, `SizedRectangle` or
-//! `GradedRectangle` (flat, pattern = reference xy), the last step `Static` or a `Dynamic`
-//! step to rest; no garment, seams, imperfection, protocol, moving bodies or
-//! augmented-Lagrangian contact (states, ties or multipliers the mapping does not carry) —
-//! refused by `check` with the field located. Garment panels (the pattern-space Delaunay
-//! mesher driven by a sampled field) are not remeshed yet.
+//! `GradedRectangle` (flat, pattern = reference xy), or a garment without other parts
+//! (`garment`: the panels meshed again by the pattern mesher from a size field, pattern =
+//! the panels' (u, v)); the last step `Static` or a `Dynamic` step to rest; no scene-level
+//! seams, imperfection, protocol, moving bodies, augmented-Lagrangian contact (states, ties or
+//! multipliers the mapping does not carry) or `ply_model: Auto` — refused by `check` with the
+//! field located.
 //!
 //! `summary.json` gets `refinement` (per pass: elements before/after, marked for
 //! refinement, coarsened, DOFs, the mapped state's relative static residual after
@@ -27,6 +28,7 @@
 //! and `element_extent` (the element's pattern extents along X and Y).
 
 pub mod indicator;
+pub mod garment;
 pub mod map;
 pub mod relax;
 pub mod size_field;
@@ -76,8 +78,20 @@ fn grid_lines(model: &Model, p: usize) -> (Vec<f64>, Vec<f64>, f64, f64) {
 /// What one pass asks for: the new node lines of every part and the counts of the report.
 struct Plan {
     lines: Vec<(Vec<f64>, Vec<f64>, f64, f64)>,
+    /// The garment panels' size fields (`garment`), for a garment scene.
+    fields: Option<Vec<crate::garment::sizing::SizeField>>,
     marked: usize,
     coarsened: usize,
+}
+
+/// The refined meshes of the scene built as `b`, at its state `state`: garment panels by size
+/// fields (`garment`), generated rectangles as graded grids ([`plan`]).
+fn plan_of(b: &BuiltScene, state: &State, tolerance: f64) -> Result<(Plan, Vec<indicator::ElementIndicator>), String> {
+    let Some(layout) = &b.garment else { return plan(&b.model, state, tolerance) };
+    let pattern = garment::pattern_of(b);
+    let ind = indicator::indicators(&b.model, state, &pattern)?;
+    let (fields, marked, coarsened) = garment::panel_fields(&b.model, &pattern, &garment::part_panels(b), layout.panels.len(), &ind, tolerance)?;
+    Ok((Plan { lines: Vec::new(), fields: Some(fields), marked, coarsened }, ind))
 }
 
 /// The refined grids of `model` at `state` for `tolerance` (module doc).
@@ -117,7 +131,7 @@ fn plan(model: &Model, state: &State, tolerance: f64) -> Result<(Plan, Vec<indic
         let ny = size_field::node_lines(&ys, &row, 1);
         lines.push((nx, ny, lx, ly));
     }
-    Ok((Plan { lines, marked, coarsened }, ind))
+    Ok((Plan { lines, fields: None, marked, coarsened }, ind))
 }
 
 /// The scene on the refined grids `lines`, continuing its last step from a mapped rest state:
@@ -173,12 +187,13 @@ pub fn refined_scene_of(scene: &Scene, model: &Model, state: &State, tolerance: 
     Ok(refined_scene(scene, &plan(model, state, tolerance)?.0.lines))
 }
 
-/// The model of a refined scene; contact bodies are the original scene's (already read).
-fn build_refined(sc: &Scene, original: &BuiltScene) -> Result<BuiltScene, RunError> {
+/// The model of a refined scene (garment panels meshed by `fields`); contact bodies are the
+/// original scene's (already read).
+fn build_refined(sc: &Scene, original: &BuiltScene, fields: Option<Vec<crate::garment::sizing::SizeField>>) -> Result<BuiltScene, RunError> {
     let mut bare = sc.clone();
     bare.contact = None;
     bare.drape = None;
-    let mut b = crate::scene::build(&bare, &sc.name, "").map_err(|e| RunError::Setup(format!("refinement: the refined scene: {e}")))?;
+    let mut b = crate::scene::build_sized(&bare, &sc.name, "", fields).map_err(|e| RunError::Setup(format!("refinement: the refined scene: {e}")))?;
     b.contact = original.contact.clone();
     Ok(b)
 }
@@ -201,11 +216,12 @@ pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &m
     for pass in 1..=spec.passes {
         let cpu = crate::study::cpu_seconds();
         let fail = |e: String| RunError::Setup(format!("refinement pass {pass}: {e}"));
-        let old = current.as_ref().map_or(&built.model, |c| &c.1.model);
-        let (pl, _) = plan(old, &state, spec.tolerance).map_err(fail)?;
+        let old_built = current.as_ref().map_or(built, |c| &c.1);
+        let old = &old_built.model;
+        let (pl, _) = plan_of(old_built, &state, spec.tolerance).map_err(fail)?;
         let sc = refined_scene(scene, &pl.lines);
-        let mut b = build_refined(&sc, built)?;
-        let (mut mapped, weights) = map::map_state(old, &state, &map::pattern_of(old), &b.model, &map::pattern_of(&b.model)).map_err(fail)?;
+        let mut b = build_refined(&sc, built, pl.fields.clone())?;
+        let (mut mapped, weights) = map::map_state(old, &state, &garment::pattern_of(old_built), &b.model, &garment::pattern_of(&b)).map_err(fail)?;
         let (pushed, _, min_gap) = match &b.contact {
             Some(c) => crate::analysis_sequence::push_out(old, &state, &b.model, &mut mapped, &weights, c),
             None => (0, 0.0, f64::INFINITY),
@@ -240,7 +256,7 @@ pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &m
         let report = json!({
             "pass": pass, "elements_before": old.elements.len(), "elements": b.model.elements.len(),
             "marked": pl.marked, "coarsened": pl.coarsened,
-            "grids": pl.lines.iter().map(|l| format!("{}x{}", l.0.len() - 1, l.1.len() - 1)).collect::<Vec<_>>(),
+            "grids": if pl.fields.is_some() { b.model.parts.iter().map(|p| format!("{}: {} elements", p.name, p.n_elements)).collect::<Vec<_>>() } else { pl.lines.iter().map(|l| format!("{}x{}", l.0.len() - 1, l.1.len() - 1)).collect::<Vec<_>>() },
             "nodes_pushed_out": pushed,
             "static_residual_interpolated": residual_mapped,
             "static_residual": residual,
@@ -269,7 +285,7 @@ pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &m
         passes.push(report);
         state = summary.final_state.clone().ok_or_else(|| fail("the continued solve kept no final state".into()))?;
         if last {
-            let (_, ind) = plan(&b.model, &state, spec.tolerance).map_err(fail)?;
+            let (_, ind) = plan_of(&b, &state, spec.tolerance).map_err(fail)?;
             summary.extra.insert("refinement".into(), json!({ "tolerance": spec.tolerance, "passes": passes, "cpu_s": crate::study::cpu_seconds() - cpu0 }));
             if let Some(dir) = &options.out_dir {
                 write_indicator_vtu(dir, &sc, &b, &state, &ind, spec.tolerance)?;
@@ -287,11 +303,16 @@ pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &m
 /// `NAME_refinement.vtu`: the final state with the indicator, the size it asks for and the
 /// elements' extents as cell data.
 fn write_indicator_vtu(dir: &std::path::Path, sc: &Scene, b: &BuiltScene, state: &State, ind: &[indicator::ElementIndicator], tolerance: f64) -> Result<(), RunError> {
-    let lines: Vec<(f64, f64)> = (0..b.model.parts.len()).map(|p| { let (_, _, lx, ly) = grid_lines(&b.model, p); (lx, ly) }).collect();
-    let size: Vec<f64> = ind.iter().enumerate().map(|(e, i)| {
-        let (lx, ly) = lines[b.model.elements[e].part];
-        size_field::target_size(i, 0, tolerance, lx / 4.0).min(size_field::target_size(i, 1, tolerance, ly / 4.0))
-    }).collect();
+    let size: Vec<f64> = match &b.garment {
+        Some(layout) => garment::element_sizes(&b.model, &garment::pattern_of(b), &garment::part_panels(b), layout.panels.len(), ind, tolerance),
+        None => {
+            let lines: Vec<(f64, f64)> = (0..b.model.parts.len()).map(|p| { let (_, _, lx, ly) = grid_lines(&b.model, p); (lx, ly) }).collect();
+            ind.iter().enumerate().map(|(e, i)| {
+                let (lx, ly) = lines[b.model.elements[e].part];
+                size_field::target_size(i, 0, tolerance, lx / 4.0).min(size_field::target_size(i, 1, tolerance, ly / 4.0))
+            }).collect()
+        }
+    };
     let options = crate::io::export::ExportOptions {
         binary: sc.output.binary,
         extra_cell_data: vec![
