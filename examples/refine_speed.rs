@@ -6,13 +6,17 @@
 //! the positions is the shape error. Writes one JSON line per run to stdout; user CPU from
 //! `getrusage` (run with RAYON_NUM_THREADS=1).
 //!
-//! `cargo run --release --example refine_speed -- [REF_N] [TOL,...]` (default 48, 0.02).
+//! `cargo run --release --example refine_speed -- [REF_N] [TOL,...] [MEMBRANE]` (default 48,
+//! 0.02, true; MEMBRANE false continues from the interpolated state, without
+//! `refine::relax`).
 
 use plyshell::refine::map::{map_state, pattern_of};
 use plyshell::{analysis, scene};
 use serde_json::json;
 
 fn text(n: usize, refine: &str) -> String {
+    let membrane = std::env::args().nth(3).unwrap_or_else(|| "true".into());
+    let refine = refine.replace("passes: 1))", &format!("passes: 1, relax_membrane: {membrane}))"));
     let t = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/garments/drape/sphere.ron")).unwrap_or_default();
     t.replace("nx: 16, ny: 16", &format!("nx: {n}, ny: {n}"))
         .replace("max_steps: 2000)))]", &format!("max_steps: 2000)), refine: {refine})]"))
@@ -32,7 +36,8 @@ fn solve(t: &str, tol: Option<f64>) -> Result<(plyshell::results::Summary, plysh
     let model = match tol {
         None => b.model,
         Some(tol) => {
-            let sc0 = scene::parse("sphere.ron", &t.replace(&format!("refine: Some((tolerance: {tol}, passes: 1))"), "refine: None")).map_err(|e| e.to_string())?;
+            let membrane = std::env::args().nth(3).unwrap_or_else(|| "true".into());
+            let sc0 = scene::parse("sphere.ron", &t.replace(&format!("refine: Some((tolerance: {tol}, passes: 1, relax_membrane: {membrane}))"), "refine: None")).map_err(|e| e.to_string())?;
             let b0 = scene::build(&sc0, "sphere.ron", t).map_err(|e| e.to_string())?;
             let first = analysis::run(&sc0, &b0, &Default::default(), &mut |_| {}).map_err(|e| e.to_string())?;
             let st = first.final_state.ok_or("no state")?;

@@ -199,7 +199,7 @@ pub(crate) fn relax_directors(sc: &Scene, b: &BuiltScene, state: &mut State) -> 
 
 /// Relative static residual of the mapped `state` on the scene's model under its first
 /// step's target loads, with its contact (the measure the step's rest test uses).
-pub(crate) fn mapped_residual(sc: &Scene, b: &BuiltScene, state: &mut State) -> Result<f64, String> {
+pub fn mapped_residual(sc: &Scene, b: &BuiltScene, state: &mut State) -> Result<f64, String> {
     let mut solver = Solver::new(&b.model, sc.solver.clone()).map_err(|e| e.to_string())?;
     if let Some(c) = &b.contact {
         crate::contact::attach(&mut solver, &b.model, c)?;

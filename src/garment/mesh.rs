@@ -302,7 +302,9 @@ pub fn mapped_counts_graded(outline: &[[f64; 2]], field: &SizeField) -> Option<[
 /// (start, end, outline segment) of the two sides, run in the same direction; the node
 /// density at s is the larger of the two sides' length / size there, the size taken from the
 /// field without the side's own refinement (a seam grades the spacing across it, not along
-/// it). A uniform field gives ceil(L/h) equal steps, L the longer side.
+/// it) and, for a field sampled across the panel (`SizeField::across`), also the length /
+/// size on 15 points of the line between the sides. A uniform field gives ceil(L/h) equal
+/// steps, L the longer side.
 pub fn graded_parameters(sides: [([f64; 2], [f64; 2], usize); 2], field: &SizeField) -> Vec<f64> {
     let longest = sides.iter().map(|&(a, b, _)| dist(a, b)).fold(0.0, f64::max);
     if field.refinements.is_empty() {
@@ -310,7 +312,22 @@ pub fn graded_parameters(sides: [([f64; 2], [f64; 2], usize); 2], field: &SizeFi
         return (0..=n).map(|i| i as f64 / n as f64).collect();
     }
     const SAMPLES: usize = 512;
-    let density = |s: f64| sides.iter().map(|&(a, b, k)| dist(a, b) / field.at_excluding(lerp(a, b, s), Some(k))).fold(0.0, f64::max);
+    let on_sides = |s: f64| sides.iter().map(|&(a, b, k)| dist(a, b) / field.at_excluding(lerp(a, b, s), Some(k))).fold(0.0, f64::max);
+    // Across the panel (`SizeField::across`): the line between the two sides' points at s,
+    // its length interpolated between theirs.
+    const ACROSS: usize = 16;
+    let density = |s: f64| {
+        let mut d = on_sides(s);
+        if field.across {
+            let (p, q) = (lerp(sides[0].0, sides[0].1, s), lerp(sides[1].0, sides[1].1, s));
+            let (l0, l1) = (dist(sides[0].0, sides[0].1), dist(sides[1].0, sides[1].1));
+            for j in 1..ACROSS {
+                let t = j as f64 / ACROSS as f64;
+                d = d.max((l0 + t * (l1 - l0)) / field.at(lerp(p, q, t)));
+            }
+        }
+        d
+    };
     let mut cum = vec![0.0; SAMPLES + 1];
     for i in 0..SAMPLES {
         let (s0, s1) = (i as f64 / SAMPLES as f64, (i + 1) as f64 / SAMPLES as f64);
@@ -399,7 +416,7 @@ fn cdt_split(o: &[[f64; 2]], field: &SizeField, segments: &[Option<usize>], core
             }
             // Pieces of about twice the local size (the split halves them).
             None => {
-                let doubled = SizeField { base: 2.0 * field.base, refinements: field.refinements.iter().map(|r| super::sizing::Refinement { h_near: 2.0 * r.h_near, ..r.clone() }).collect(), scales: None };
+                let doubled = SizeField { base: 2.0 * field.base, refinements: field.refinements.iter().map(|r| super::sizing::Refinement { h_near: 2.0 * r.h_near, ..r.clone() }).collect(), scales: None, across: field.across };
                 graded_parameters([(a, b, usize::MAX), (a, b, usize::MAX)], &doubled)
             }
         };

@@ -62,12 +62,16 @@ pub struct SizeField {
     pub refinements: Vec<Refinement>,
     /// The length scales of an automatic size (None for a fixed size).
     pub scales: Option<LengthScales>,
+    /// A mapped grid samples the field across the panel, not only along its sides (a field
+    /// sampled from a solution, `refine::garment`, whose refinements lie inside the panel;
+    /// seam and notch refinements lie on the outline and grade from the sides).
+    pub across: bool,
 }
 
 impl SizeField {
     /// A uniform size h.
     pub fn uniform(h: f64) -> Self {
-        Self { base: h, refinements: Vec::new(), scales: None }
+        Self { base: h, refinements: Vec::new(), scales: None, across: false }
     }
 
     /// Size at pattern point `p`.
@@ -156,7 +160,7 @@ pub fn panel_field(spec: &GarmentSpec, pi: usize, physics: &PlyPhysics) -> Resul
     placed.extend(interior_samples(&outline, coarse).into_iter().map(|q| p.placement.map(q)));
     scales.body_radius = (physics.body_radius)(&placed, 2.0 * lb, lb);
     let h = size_from_scales(a.tolerance, &scales, l);
-    let mut field = SizeField { base: h, refinements: Vec::new(), scales: Some(scales) };
+    let mut field = SizeField { base: h, refinements: Vec::new(), scales: Some(scales), across: false };
     if a.seam_factor < 1.0 {
         let h_near = a.seam_factor * h;
         let band = lb.max(2.0 * h);

@@ -5,27 +5,32 @@
 //! size field from it (`size_field`: h (T/η)^{1/2}, clamped to [h/4, 2h], graded ≤ 25 %),
 //! remeshes the parts with it (`GradedRectangle` tensor grids), maps the state onto the new
 //! mesh (`map`: point location and inverse bilinear interpolation in pattern space; then the
-//! barrier push-out of mesh sequencing, `analysis_sequence`, and on request its director
-//! relaxation) and
-//! continues the last step to rest there. Elements whose indicator is below T grow (at
+//! barrier push-out of mesh sequencing, `analysis_sequence`, on request its director
+//! relaxation, and the membrane relaxation of `relax`, which removes the interpolated state's
+//! O(h²) membrane mismatch) and continues the last step to rest there (`relax::stage`
+//! without the spring, then time steps from Δt = 10 τ). Elements whose indicator is below T grow (at
 //! most ×2 per pass), so flat regions coarsen.
 //!
 //! What can be refined: scenes whose parts are all `Rectangle`, `SizedRectangle` or
-//! `GradedRectangle` (flat, pattern = reference xy), the last step `Static` or a `Dynamic`
-//! step to rest; no garment, seams, imperfection, protocol, moving bodies or
-//! augmented-Lagrangian contact (states, ties or multipliers the mapping does not carry) —
-//! refused by `check` with the field located. Garment panels (the pattern-space Delaunay
-//! mesher driven by a sampled field) are not remeshed yet.
+//! `GradedRectangle` (flat, pattern = reference xy), or a garment without other parts
+//! (`garment`: the panels meshed again by the pattern mesher from a size field, pattern =
+//! the panels' (u, v)); the last step `Static` or a `Dynamic` step to rest; no scene-level
+//! seams, imperfection, protocol, moving bodies, augmented-Lagrangian contact (states, ties or
+//! multipliers the mapping does not carry) or `ply_model: Auto` — refused by `check` with the
+//! field located.
 //!
 //! `summary.json` gets `refinement` (per pass: elements before/after, marked for
-//! refinement, coarsened, DOFs, the mapped state's relative static residual before
-//! continuing, time steps, Newton iterations, CPU seconds) and the output directory
+//! refinement, coarsened, DOFs, the mapped state's relative static residual after
+//! interpolation and after the relaxations, the relaxation and descent stages, time steps,
+//! Newton iterations, CPU seconds) and the output directory
 //! `NAME_refinement.vtu`: the final state with cell data `indicator` (η at the final
 //! state), `element_size` (the size the indicator asks for there, min over directions)
 //! and `element_extent` (the element's pattern extents along X and Y).
 
 pub mod indicator;
+pub mod garment;
 pub mod map;
+pub mod relax;
 pub mod size_field;
 
 pub use crate::scene::sequence::{RefineSpec, MAX_PASSES};
@@ -73,8 +78,20 @@ fn grid_lines(model: &Model, p: usize) -> (Vec<f64>, Vec<f64>, f64, f64) {
 /// What one pass asks for: the new node lines of every part and the counts of the report.
 struct Plan {
     lines: Vec<(Vec<f64>, Vec<f64>, f64, f64)>,
+    /// The garment panels' size fields (`garment`), for a garment scene.
+    fields: Option<Vec<crate::garment::sizing::SizeField>>,
     marked: usize,
     coarsened: usize,
+}
+
+/// The refined meshes of the scene built as `b`, at its state `state`: garment panels by size
+/// fields (`garment`), generated rectangles as graded grids ([`plan`]).
+fn plan_of(b: &BuiltScene, state: &State, tolerance: f64) -> Result<(Plan, Vec<indicator::ElementIndicator>), String> {
+    let Some(layout) = &b.garment else { return plan(&b.model, state, tolerance) };
+    let pattern = garment::pattern_of(b);
+    let ind = indicator::indicators(&b.model, state, &pattern)?;
+    let (fields, marked, coarsened) = garment::panel_fields(&b.model, &pattern, &garment::part_panels(b), layout.panels.len(), &ind, tolerance)?;
+    Ok((Plan { lines: Vec::new(), fields: Some(fields), marked, coarsened }, ind))
 }
 
 /// The refined grids of `model` at `state` for `tolerance` (module doc).
@@ -114,23 +131,32 @@ fn plan(model: &Model, state: &State, tolerance: f64) -> Result<(Plan, Vec<indic
         let ny = size_field::node_lines(&ys, &row, 1);
         lines.push((nx, ny, lx, ly));
     }
-    Ok((Plan { lines, marked, coarsened }, ind))
+    Ok((Plan { lines, fields: None, marked, coarsened }, ind))
 }
 
 /// The scene on the refined grids `lines`, continuing its last step from a mapped rest state:
-/// only that step, `refine` cleared; a `Static` step becomes a `Dynamic` step to rest with
-/// the default settings (its loads are already on, and the mapped state carries a mapping
-/// mismatch — membrane strain of the lifted chords, shear of the interpolated directors —
-/// whose forces exceed fabric's weight by orders: a static Newton from there turned a
-/// director by > 1 rad in its first correction on the Peirce strip, the pseudo-transient
-/// step relaxes it in ~15 time steps). The rest state is the same static equilibrium.
+/// only that step, with the load scales the steps before it left, `refine` cleared; a `Static` step becomes a `Dynamic` step to rest with
+/// the default settings (its loads are already on; from the interpolated state, whose
+/// membrane mismatch exceeds fabric's weight by orders, a static Newton turned a director by
+/// > 1 rad in its first correction on the Peirce strip; `run` relaxes that mismatch first,
+/// `relax`, and starts the time steps at Δt = 10 τ). The rest state is the same static
+/// equilibrium.
 fn refined_scene(scene: &Scene, lines: &[(Vec<f64>, Vec<f64>, f64, f64)]) -> Scene {
     let mut s = scene.clone();
     for (p, (x, y, lx, ly)) in s.parts.iter_mut().zip(lines) {
         p.mesh = MeshSpec::GradedRectangle { lx: *lx, ly: *ly, x: x.clone(), y: y.clone() };
     }
     let last = s.steps.len().saturating_sub(1);
+    // Load scales carry over from step to step (`scene::steps`): the kept step gets those of
+    // the steps dropped before it, its own last.
+    let mut scale = std::collections::BTreeMap::new();
+    for st in &s.steps {
+        scale.extend(st.scale.iter().map(|(k, v)| (k.clone(), *v)));
+    }
     s.steps.drain(..last);
+    if let Some(st) = s.steps.first_mut() {
+        st.scale = scale.into_iter().collect();
+    }
     for st in &mut s.steps {
         st.refine = None;
         st.increments = 1;
@@ -161,12 +187,13 @@ pub fn refined_scene_of(scene: &Scene, model: &Model, state: &State, tolerance: 
     Ok(refined_scene(scene, &plan(model, state, tolerance)?.0.lines))
 }
 
-/// The model of a refined scene; contact bodies are the original scene's (already read).
-fn build_refined(sc: &Scene, original: &BuiltScene) -> Result<BuiltScene, RunError> {
+/// The model of a refined scene (garment panels meshed by `fields`); contact bodies are the
+/// original scene's (already read).
+fn build_refined(sc: &Scene, original: &BuiltScene, fields: Option<Vec<crate::garment::sizing::SizeField>>) -> Result<BuiltScene, RunError> {
     let mut bare = sc.clone();
     bare.contact = None;
     bare.drape = None;
-    let mut b = crate::scene::build(&bare, &sc.name, "").map_err(|e| RunError::Setup(format!("refinement: the refined scene: {e}")))?;
+    let mut b = crate::scene::build_sized(&bare, &sc.name, "", fields).map_err(|e| RunError::Setup(format!("refinement: the refined scene: {e}")))?;
     b.contact = original.contact.clone();
     Ok(b)
 }
@@ -189,14 +216,14 @@ pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &m
     for pass in 1..=spec.passes {
         let cpu = crate::study::cpu_seconds();
         let fail = |e: String| RunError::Setup(format!("refinement pass {pass}: {e}"));
-        let old = current.as_ref().map_or(&built.model, |c| &c.1.model);
-        let (pl, _) = plan(old, &state, spec.tolerance).map_err(fail)?;
+        let old_built = current.as_ref().map_or(built, |c| &c.1);
+        let old = &old_built.model;
+        let (pl, _) = plan_of(old_built, &state, spec.tolerance).map_err(fail)?;
         let sc = refined_scene(scene, &pl.lines);
-        let b = build_refined(&sc, built)?;
-        let new = &b.model;
-        let (mut mapped, weights) = map::map_state(old, &state, &map::pattern_of(old), new, &map::pattern_of(new)).map_err(fail)?;
+        let mut b = build_refined(&sc, built, pl.fields.clone())?;
+        let (mut mapped, weights) = map::map_state(old, &state, &garment::pattern_of(old_built), &b.model, &garment::pattern_of(&b)).map_err(fail)?;
         let (pushed, _, min_gap) = match &b.contact {
-            Some(c) => crate::analysis_sequence::push_out(old, &state, new, &mut mapped, &weights, c),
+            Some(c) => crate::analysis_sequence::push_out(old, &state, &b.model, &mut mapped, &weights, c),
             None => (0, 0.0, f64::INFINITY),
         };
         if min_gap <= 0.0 {
@@ -204,22 +231,42 @@ pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &m
         }
         let residual_mapped = crate::analysis_sequence::mapped_residual(&sc, &b, &mut mapped).map_err(fail)?;
         let relaxation = if spec.relax_directors { crate::analysis_sequence::relax_directors(&sc, &b, &mut mapped).map_err(fail)? } else { (0, 0) };
+        // Membrane-consistent mapping (`relax`): one proximal stage with the normal spring.
+        let cpu_relax = crate::study::cpu_seconds();
+        let membrane = if spec.relax_membrane { Some(relax::stage(&sc, &b, &mut mapped, Some(relax::TAU_S)).map_err(fail)?) } else { None };
         let residual = crate::analysis_sequence::mapped_residual(&sc, &b, &mut mapped).map_err(fail)?;
+        let cpu_relax = crate::study::cpu_seconds() - cpu_relax;
         let last = pass == spec.passes;
         let scales = b.steps.last().map(|s| s.target_scales.clone()).unwrap_or_default();
         let old_scales = match &current { Some(c) => c.1.steps.last(), None => built.steps.last() }.map(|s| s.target_scales.clone()).unwrap_or_default();
         let pi_before = potential(old, &state, &old_scales);
-        let pi_mapped = potential(new, &mapped, &scales);
+        let pi_mapped = potential(&b.model, &mapped, &scales);
+        // The continuation: the minimisation without the spring (skipped if it does not
+        // converge in one solve), then the step to rest from Δt = 10 τ (the default first
+        // step's ramp, 1 ms × 1.5ᵏ, is what the relaxed state no longer needs).
+        let cpu_descent = crate::study::cpu_seconds();
+        let relaxed = membrane.as_ref().is_some_and(|m| m.failed.is_none());
+        let descent = if relaxed { Some(relax::stage(&sc, &b, &mut mapped, None).map_err(fail)?) } else { None };
+        let cpu_descent = crate::study::cpu_seconds() - cpu_descent;
+        if relaxed
+            && let Some(StepKind::Dynamic(ds)) = b.steps.last_mut().map(|s| &mut s.kind)
+        {
+            ds.dt = ds.dt.max(relax::CONTINUATION_DT_FACTOR * relax::TAU_S);
+        }
         let report = json!({
-            "pass": pass, "elements_before": old.elements.len(), "elements": new.elements.len(),
+            "pass": pass, "elements_before": old.elements.len(), "elements": b.model.elements.len(),
             "marked": pl.marked, "coarsened": pl.coarsened,
-            "grids": pl.lines.iter().map(|l| format!("{}x{}", l.0.len() - 1, l.1.len() - 1)).collect::<Vec<_>>(),
+            "grids": if pl.fields.is_some() { b.model.parts.iter().map(|p| format!("{}: {} elements", p.name, p.n_elements)).collect::<Vec<_>>() } else { pl.lines.iter().map(|l| format!("{}x{}", l.0.len() - 1, l.1.len() - 1)).collect::<Vec<_>>() },
             "nodes_pushed_out": pushed,
             "static_residual_interpolated": residual_mapped,
             "static_residual": residual,
             "potential_before_j": pi_before,
             "potential_mapped_j": pi_mapped,
             "director_relaxation": { "time_steps": relaxation.0, "newton_iterations": relaxation.1 },
+            "membrane_relaxation": membrane.as_ref().map(|m| relax::report(Some(relax::TAU_S), m)),
+            "membrane_relaxation_cpu_s": cpu_relax,
+            "descent": descent.as_ref().map(|d| relax::report(None, d)),
+            "descent_cpu_s": cpu_descent,
         });
         let out = if last { options.clone() } else { RunOptions::default() };
         let mut summary = run_from(&sc, &b, &out, Some(Start { state: mapped, report: json!(null) }), progress).map_err(|e| match e {
@@ -233,12 +280,12 @@ pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &m
         report["newton_iterations"] = json!(summary.newton_iterations);
         report["cpu_s"] = json!(crate::study::cpu_seconds() - cpu);
         if let Some(rest) = summary.final_state.as_ref() {
-            report["potential_rest_j"] = json!(potential(new, rest, &scales));
+            report["potential_rest_j"] = json!(potential(&b.model, rest, &scales));
         }
         passes.push(report);
         state = summary.final_state.clone().ok_or_else(|| fail("the continued solve kept no final state".into()))?;
         if last {
-            let (_, ind) = plan(&b.model, &state, spec.tolerance).map_err(fail)?;
+            let (_, ind) = plan_of(&b, &state, spec.tolerance).map_err(fail)?;
             summary.extra.insert("refinement".into(), json!({ "tolerance": spec.tolerance, "passes": passes, "cpu_s": crate::study::cpu_seconds() - cpu0 }));
             if let Some(dir) = &options.out_dir {
                 write_indicator_vtu(dir, &sc, &b, &state, &ind, spec.tolerance)?;
@@ -256,11 +303,16 @@ pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &m
 /// `NAME_refinement.vtu`: the final state with the indicator, the size it asks for and the
 /// elements' extents as cell data.
 fn write_indicator_vtu(dir: &std::path::Path, sc: &Scene, b: &BuiltScene, state: &State, ind: &[indicator::ElementIndicator], tolerance: f64) -> Result<(), RunError> {
-    let lines: Vec<(f64, f64)> = (0..b.model.parts.len()).map(|p| { let (_, _, lx, ly) = grid_lines(&b.model, p); (lx, ly) }).collect();
-    let size: Vec<f64> = ind.iter().enumerate().map(|(e, i)| {
-        let (lx, ly) = lines[b.model.elements[e].part];
-        size_field::target_size(i, 0, tolerance, lx / 4.0).min(size_field::target_size(i, 1, tolerance, ly / 4.0))
-    }).collect();
+    let size: Vec<f64> = match &b.garment {
+        Some(layout) => garment::element_sizes(&b.model, &garment::pattern_of(b), &garment::part_panels(b), layout.panels.len(), ind, tolerance),
+        None => {
+            let lines: Vec<(f64, f64)> = (0..b.model.parts.len()).map(|p| { let (_, _, lx, ly) = grid_lines(&b.model, p); (lx, ly) }).collect();
+            ind.iter().enumerate().map(|(e, i)| {
+                let (lx, ly) = lines[b.model.elements[e].part];
+                size_field::target_size(i, 0, tolerance, lx / 4.0).min(size_field::target_size(i, 1, tolerance, ly / 4.0))
+            }).collect()
+        }
+    };
     let options = crate::io::export::ExportOptions {
         binary: sc.output.binary,
         extra_cell_data: vec![

@@ -60,6 +60,13 @@ fn positive(x: f64) -> bool {
 /// Builds the model of `scene`, whose text `text` came from `file` (for error positions;
 /// OBJ paths are relative to the file's directory).
 pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneError> {
+    build_sized(scene, file, text, None)
+}
+
+/// [`build`] with the garment panels meshed by the given size fields (one per panel, in the
+/// spec's order) instead of the garment's `element_size` (a-posteriori refinement,
+/// `refine::garment`).
+pub fn build_sized(scene: &Scene, file: &str, text: &str, garment_sizes: Option<Vec<crate::garment::sizing::SizeField>>) -> Result<BuiltScene, SceneError> {
     let text = super::strip_bom(text);
     let loc = Locator::new(file, text);
     let base_dir = Path::new(file).parent().unwrap_or(Path::new("."));
@@ -223,7 +230,11 @@ pub fn build(scene: &Scene, file: &str, text: &str) -> Result<BuiltScene, SceneE
     let mut size_fields: Option<Vec<crate::garment::sizing::SizeField>> = None;
     let resolved = match resolved {
         Some(mut g) => {
-            if let Some(fields) = super::sizing::resolve_sizes(&g, scene, &loc, base_dir, &parts, &materials)? {
+            let fields = match garment_sizes {
+                Some(f) => Some(f),
+                None => super::sizing::resolve_sizes(&g, scene, &loc, base_dir, &parts, &materials)?,
+            };
+            if let Some(fields) = fields {
                 let h = fields.iter().map(|f| f.min()).fold(f64::INFINITY, f64::min);
                 g.element_size = crate::garment::ElementSize::Fixed(h);
                 size_fields = Some(fields);

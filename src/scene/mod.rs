@@ -10,7 +10,7 @@ mod spec;
 mod sizing;
 mod steps;
 
-pub use build::{build, BuiltScene};
+pub use build::{build, build_sized, BuiltScene};
 pub use crate::results::Monitor;
 pub use crate::input::{decode, strip_bom, Locator, SceneError, MAX_SCENE_BYTES};
 pub use spec::*;

@@ -129,6 +129,15 @@ pub struct RefineSpec {
     /// 311 time steps / iterations, the same rest states to the reported digits).
     #[serde(default)]
     pub relax_directors: bool,
+    /// Relax the mapped state's membrane before continuing (`refine::relax`: proximal Newton
+    /// stages with a normal spring; default true). False continues from the interpolated
+    /// state (the behaviour before; for comparison).
+    #[serde(default = "yes")]
+    pub relax_membrane: bool,
+}
+
+fn yes() -> bool {
+    true
 }
 
 fn one() -> usize {
@@ -163,9 +172,18 @@ pub fn check_refine(scene: &Scene, loc: &Locator) -> Result<(), SceneError> {
         if s.linear {
             return bad("refine", "a linear step has no nonlinear state to continue: remove linear: true or refine".into());
         }
-        let other = unmapped(scene).map(|w| if w == "a garment" { "a garment (panels are not remeshed by refinement yet)" } else { w });
+        if let Some(g) = &scene.garment {
+            // Garment panels are remeshed by the pattern mesher (`refine::garment`).
+            if !scene.parts.is_empty() {
+                return bad("refine", "refinement remeshes either a garment's panels or generated rectangles; this scene has both".into());
+            }
+            if crate::garment::laminate::has_auto(g) {
+                return bad("refine", "a garment with ply_model Auto is solved in two passes (analysis_auto), which refinement does not continue".into());
+            }
+        }
+        let other = unmapped(scene).filter(|&w| w != "a garment");
         if let Some(what) = other {
-            return bad("refine", format!("refinement remeshes generated rectangles only; this scene has {what}"));
+            return bad("refine", format!("refinement remeshes generated rectangles and garment panels only; this scene has {what}"));
         }
         for p in &scene.parts {
             if !matches!(p.mesh, MeshSpec::Rectangle { .. } | MeshSpec::SizedRectangle { .. } | MeshSpec::GradedRectangle { .. }) {
