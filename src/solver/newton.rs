@@ -160,6 +160,10 @@ pub struct Solver<'m> {
     pub(super) clock: f64,
     /// Analysis time at the end of the current attempt; becomes `clock` on commit.
     pub(super) clock_trial: f64,
+    /// Energy line searches so far and those whose first (full-step) trial was rejected
+    /// ([`Solver::energy_line_search`] evaluates first trials by their potential alone once
+    /// rejections are frequent).
+    pub(super) first_trials: [usize; 2],
 }
 
 /// A first Newton correction of an automatic increment turning a director by more than this
@@ -197,6 +201,7 @@ impl<'m> Solver<'m> {
             nodal_potential: Some(0.0),
             clock: 0.0,
             clock_trial: 0.0,
+            first_trials: [0; 2],
         })
     }
 
