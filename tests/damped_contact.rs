@@ -11,9 +11,9 @@
 //! 0.5 % of the flap's 20 cm length (friction μ = 0.3 makes it path dependent; measured
 //! 0.06 mm apart).
 
-use plyshell::scene;
-use plyshell::solver::Solver;
+mod common;
 
+use plyshell::scene;
 
 /// The flap's tip (Ux, Uz) after a static step of `kind` ("" for Static), with the number of
 /// accepted increments, those solved by damped Newton, the last relative residual and the
@@ -27,27 +27,12 @@ fn flap(kind: &str) -> ([f64; 2], usize, usize, f64, usize) {
     assert!(text.contains(kind) && !text.contains("enabled: false"), "scene edits applied");
     let sc = scene::parse("flap.ron", &text).unwrap_or_else(|e| panic!("{e}"));
     let built = scene::build(&sc, "flap.ron", &text).unwrap_or_else(|e| panic!("{e}"));
-    let model = &built.model;
-    let parts: Vec<usize> = (0..model.parts.len()).collect();
-    let mut state = model.initial_state();
-    let (mut overlaps, mut accepted, mut damped, mut last_residual) = (0usize, 0usize, 0usize, f64::NAN);
-    let mut solver = Solver::new(model, sc.solver.clone()).expect("solver");
-    let setup = built.interply.as_ref().expect("inter-ply contact on by default");
-    assert!(setup.barrier.is_some(), "the barrier formulation");
-    plyshell::contact::interply::attach(&mut solver, model, setup).expect("surface contact attaches");
-    solver
-        .run(
-            &built.steps,
-            &mut state,
-            &mut |r, s, _| {
-                accepted += 1;
-                damped += r.damped as usize;
-                last_residual = r.residuals.last().copied().unwrap_or(f64::NAN);
-                overlaps += plyshell::contact::intersection::intersecting_prisms(model, s, &parts, 1.0 - 0.2).len();
-            },
-            &mut |_| {},
-        )
-        .unwrap_or_else(|e| panic!("{kind}: {e}"));
+    let surface = built.interply.as_ref().expect("inter-ply contact on by default");
+    assert!(surface.barrier.is_some(), "the barrier formulation");
+    let (state, reports, _, overlaps) = common::solve_on_bodies(&sc, &built);
+    let accepted = reports.len();
+    let damped = reports.iter().filter(|r| r.damped).count();
+    let last_residual = reports.last().and_then(|r| r.residuals.last().copied()).unwrap_or(f64::NAN);
     let tip = built.monitors[0].node;
     let u = state.u[tip];
     println!("{kind}: {accepted} increments ({damped} damped), last relative residual {last_residual:.2e}, overlapping prisms {overlaps}, tip {:?}", [u.x, u.z]);

@@ -4,18 +4,21 @@ use plyshell::model::State;
 use plyshell::scene::{BuiltScene, Scene};
 use plyshell::solver::{IncrementReport, Solver};
 
-/// Solves `built` from its initial state with its rigid-body contact attached, and a
+/// Solves `built` from its initial state with its rigid-body contact attached (if any), and a
 /// garment's surface contact (barrier inter-ply and self contact, on by default). Returns the
 /// final state, every converged increment's report, the largest penetration of a shell
 /// face into a body over all accepted states (`contact::max_penetration`, a parry3d query
-/// independent of the contact term; ≤ 0 when no face ever reached a body), and the number of
+/// independent of the contact term; ≤ 0 when no face ever reached a body, −∞ without bodies),
+/// and the number of
 /// overlapping triangle prisms of the surface-contact parts at the contact thickness
 /// (1 − f) h (`contact::intersection`, GJK, also independent of it) summed over those states.
 pub fn solve_on_bodies(sc: &Scene, built: &BuiltScene) -> (State, Vec<IncrementReport>, f64, usize) {
     let model = &built.model;
-    let setup = built.contact.as_ref().expect("the scene has contact bodies");
+    let setup = built.contact.as_ref();
     let mut solver = Solver::new(model, sc.solver.clone()).expect("solver");
-    plyshell::contact::attach(&mut solver, model, setup).expect("contact attaches");
+    if let Some(setup) = setup {
+        plyshell::contact::attach(&mut solver, model, setup).expect("contact attaches");
+    }
     if let Some(surface) = &built.interply {
         plyshell::contact::interply::attach(&mut solver, model, surface).expect("surface contact attaches");
     }
@@ -31,8 +34,10 @@ pub fn solve_on_bodies(sc: &Scene, built: &BuiltScene) -> (State, Vec<IncrementR
             &mut |r, st, solver| {
                 reports.push(r.clone());
                 // Bodies at their placement at this state (moving bodies: `contact::motion`).
-                let placed: Vec<_> = setup.bodies.iter().map(|b| b.at_time(solver.clock())).collect();
-                penetration = penetration.max(plyshell::contact::max_penetration(model, st, &placed));
+                if let Some(setup) = setup {
+                    let placed: Vec<_> = setup.bodies.iter().map(|b| b.at_time(solver.clock())).collect();
+                    penetration = penetration.max(plyshell::contact::max_penetration(model, st, &placed));
+                }
                 if let Some(b) = surface {
                     overlaps += plyshell::contact::intersection::intersecting_prisms(model, st, &b.parts, 1.0 - b.settings.distance_factor).len();
                 }
