@@ -274,13 +274,15 @@ pub fn run_from(scene: &Scene, built: &BuiltScene, options: &RunOptions, start: 
         }
         let forces = (!summary.increments.is_empty()).then_some((solver.internal_force(), f_ext.as_slice()));
         let position = |n: usize| model.position(&state, n);
-        let seams: Vec<_> = built
-            .seams
-            .iter()
-            .map(|s| crate::garment::compliant::summarize(s, &crate::garment::compliant::seam_points(s, position, forces), position))
-            .collect();
+        let points: Vec<_> = built.seams.iter().map(|s| crate::garment::compliant::seam_points(s, position, forces)).collect();
+        let seams: Vec<_> = built.seams.iter().zip(&points).map(|(s, p)| crate::garment::compliant::summarize(s, p, position)).collect();
         if let Ok(v) = serde_json::to_value(seams) {
             summary.extra.insert("seams".into(), v);
+        }
+        // Multi-ply seams with their plies' forces summed node by node.
+        let summed = crate::garment::compliant::ply_summed(&built.seams, &points);
+        if !summed.is_empty() && let Ok(v) = serde_json::to_value(summed) {
+            summary.extra.insert("seams_plies_summed".into(), v);
         }
     }
     if let Some(p) = &built.protocol {

@@ -163,13 +163,26 @@ fn shape_error(run: &Surface, reference: &Surface) -> (f64, f64) {
     (rms / size, max / size)
 }
 
-/// Mean force per length of each seam, the plies of a multi-ply seam (`seam/ply`) summed.
+/// Mean force per length of each seam: a multi-ply seam (`seam/ply`) with its plies' forces
+/// summed as vectors node by node (`seams_plies_summed` of the summary,
+/// [`crate::garment::compliant::ply_summed`]: a ply pushed into compression at the seam counts
+/// against one in tension), else — plies whose seam rows differ — the plies' mean magnitudes
+/// added.
 fn seam_forces(summary: &Summary) -> Vec<(String, f64)> {
     let mut out: Vec<(String, f64)> = Vec::new();
     let Some(list) = summary.extra.get("seams").and_then(|v| v.as_array()) else { return out };
+    let summed = |base: &str| {
+        summary.extra.get("seams_plies_summed").and_then(|v| v.as_array()).and_then(|a| a.iter().find(|s| s.get("name").and_then(|n| n.as_str()) == Some(base))).and_then(|s| s.get("force_per_length_mean").and_then(|v| v.as_f64()))
+    };
     for s in list {
         let (Some(name), Some(f)) = (s.get("name").and_then(|v| v.as_str()), s.get("force_per_length_mean").and_then(|v| v.as_f64())) else { continue };
         let base = name.split('/').next().unwrap_or(name).to_string();
+        if let Some(total) = summed(&base) {
+            if !out.iter().any(|(n, _)| *n == base) {
+                out.push((base, total));
+            }
+            continue;
+        }
         match out.iter_mut().find(|(n, _)| *n == base) {
             Some(e) => e.1 += f,
             None => out.push((base, f)),

@@ -1,5 +1,5 @@
 //! Static steps with barrier inter-ply contact on the two-ply flap
-//! (`garments/studies/two_ply_flap.ron` with its contact on). (1) `StaticDamped`
+//! (`garments/studies/two_ply_flap.ron`). (1) `StaticDamped`
 //! (Levenberg–Marquardt): its trial states add contact couplings, so the tangent's pattern
 //! grows inside an iteration, and a rejected trial must leave the base state's tangent in the
 //! grown pattern (it used to restore the old values and panic in the factorization:
@@ -21,10 +21,9 @@ use plyshell::scene;
 fn flap(kind: &str) -> ([f64; 2], usize, usize, f64, usize) {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("garments/studies/two_ply_flap.ron");
     let shipped = std::fs::read_to_string(&path).expect("the two-ply flap");
-    // The flap as shipped (contact off for the study's speed), with its default inter-ply
-    // contact on (barrier, μ = 0.3).
-    let text = shipped.replace("interply: (enabled: false),", "").replace("(name: \"hang\", increments: 8,", &format!("(name: \"hang\", increments: 8, {kind}"));
-    assert!(text.contains(kind) && !text.contains("enabled: false"), "scene edits applied");
+    // The flap as shipped, with its default inter-ply contact (barrier, μ = 0.3).
+    let text = shipped.replace("(name: \"hang\", increments: 8,", &format!("(name: \"hang\", increments: 8, {kind}"));
+    assert!(text.contains(kind) && !text.contains("interply"), "scene edits applied");
     let sc = scene::parse("flap.ron", &text).unwrap_or_else(|e| panic!("{e}"));
     let built = scene::build(&sc, "flap.ron", &text).unwrap_or_else(|e| panic!("{e}"));
     let surface = built.interply.as_ref().expect("inter-ply contact on by default");
@@ -51,4 +50,33 @@ fn static_steps_with_interply_contact_complete_without_intersections() {
     }
     let gap = ((tip_d[0] - tip_s[0]).powi(2) + (tip_d[1] - tip_s[1]).powi(2)).sqrt();
     assert!(gap < 0.005 * 0.2, "rest states {tip_d:?} and {tip_s:?} are {gap:.2e} m apart");
+}
+
+/// The seam's force with its plies summed node by node (`seams_plies_summed` of
+/// `summary.json`, `garment::compliant::ply_summed`) is the weight it carries: the lower
+/// panel, ρ_A g A = (0.15 + 0.10) kg/m² · 9.81 m/s² · 0.10 m × 0.04 m, over the seam's 0.04 m
+/// = 0.24525 N/m (statics: the panel hangs from the seam). With inter-ply contact the back
+/// ply is pushed into compression at the seam, so the plies' magnitudes do not add up to it
+/// (0.367 + 0.123 N/m measured); without contact both plies pull. Tolerance 1 % (the mean of
+/// the node-by-node magnitudes along the seam, not the resultant itself).
+#[test]
+fn ply_summed_seam_force_is_the_weight_below_the_seam() {
+    use plyshell::analysis::{self, RunOptions};
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("garments/studies/two_ply_flap.ron");
+    let shipped = std::fs::read_to_string(&path).expect("the two-ply flap");
+    let weight_per_length = (0.15 + 0.10) * 9.81 * 0.10 * 0.04 / 0.04;
+    let off = shipped.replace("        seams: [", "        interply: (enabled: false),\n        seams: [");
+    assert!(off.contains("enabled: false"), "contact turned off");
+    for (label, text) in [("contact off", off), ("contact on", shipped.clone())] {
+        let sc = scene::parse("flap.ron", &text).unwrap_or_else(|e| panic!("{e}"));
+        let built = scene::build(&sc, "flap.ron", &text).unwrap_or_else(|e| panic!("{e}"));
+        let summary = analysis::run(&sc, &built, &RunOptions { out_dir: None }, &mut |_| {}).unwrap_or_else(|e| panic!("{label}: {e}"));
+        let seams = summary.extra.get("seams").and_then(|v| v.as_array()).expect("seams");
+        let magnitudes: f64 = seams.iter().filter_map(|s| s.get("force_per_length_mean").and_then(|v| v.as_f64())).sum();
+        let summed = summary.extra.get("seams_plies_summed").and_then(|v| v.as_array()).and_then(|a| a.first()).expect("the welded seam's plies summed");
+        assert_eq!(summed.get("plies").and_then(|v| v.as_u64()), Some(2));
+        let f = summed.get("force_per_length_mean").and_then(|v| v.as_f64()).expect("force");
+        println!("{label}: plies summed {f:.5} N/m, plies' magnitudes added {magnitudes:.5} N/m, weight below the seam {weight_per_length:.5} N/m");
+        assert!((f / weight_per_length - 1.0).abs() < 0.01, "{label}: {f} vs {weight_per_length} N/m");
+    }
 }

@@ -154,6 +154,54 @@ pub fn seam_points(seam: &SeamInfo, position: impl Fn(usize) -> Vector3<f64> + C
         .collect()
 }
 
+/// The plies of one multi-ply seam taken together: the seams named `base/ply` with the same
+/// number of slave nodes (the plies of a panel share its pattern mesh, so their slave rows
+/// run through the same pattern points in the same order), their forces per length summed
+/// as vectors node by node — the force the whole seam transmits, in which a ply pushed into
+/// compression at the seam counts against one in tension (the sum of the plies' magnitudes
+/// does not) — and the tributary-weighted mean and max of its magnitude (N/m). Single-ply
+/// seams and plies whose rows differ are left out.
+#[derive(Clone, Debug, Serialize)]
+pub struct PlySummedSeam {
+    /// Seam name without the ply (`base`).
+    pub name: String,
+    /// The plies summed.
+    pub plies: usize,
+    /// Mean and max of |Σ_plies force per length| (N/m).
+    pub force_per_length_mean: f64,
+    pub force_per_length_max: f64,
+}
+
+/// [`PlySummedSeam`] of every multi-ply seam among `seams` with their points `points`
+/// ([`seam_points`]), in the order the seams first appear.
+pub fn ply_summed(seams: &[SeamInfo], points: &[Vec<SeamPoint>]) -> Vec<PlySummedSeam> {
+    let base = |s: &SeamInfo| s.name.split_once('/').map(|(b, _)| b.to_string());
+    let mut names: Vec<String> = Vec::new();
+    for s in seams {
+        if let Some(b) = base(s) && !names.contains(&b) {
+            names.push(b);
+        }
+    }
+    let mut out = Vec::new();
+    for name in names {
+        let members: Vec<usize> = (0..seams.len()).filter(|&i| base(&seams[i]).as_deref() == Some(name.as_str())).collect();
+        let n = seams[members[0]].slave.len();
+        if members.len() < 2 || members.iter().any(|&i| seams[i].slave.len() != n || points[i].len() != n) {
+            continue;
+        }
+        let tributary = &seams[members[0]].tributary;
+        let total: f64 = tributary.iter().sum::<f64>().max(1e-300);
+        let summed: Vec<f64> = (0..n).map(|k| members.iter().map(|&i| points[i][k].force).sum::<Vector3<f64>>().norm()).collect();
+        out.push(PlySummedSeam {
+            name,
+            plies: members.len(),
+            force_per_length_mean: summed.iter().zip(tributary).map(|(f, l)| f * l).sum::<f64>() / total,
+            force_per_length_max: summed.iter().copied().fold(0.0, f64::max),
+        });
+    }
+    out
+}
+
 /// One seam's summary: means (weighted by tributary length), maxima and where.
 #[derive(Clone, Debug, Serialize)]
 pub struct SeamSummary {
