@@ -1,5 +1,6 @@
 //! Static steps with barrier inter-ply contact on the two-ply flap
-//! (`garments/studies/two_ply_flap.ron`). (1) `StaticDamped`
+//! (`garments/studies/two_ply_flap.ron` with its contact on; it ships with contact off, see
+//! its header). (1) `StaticDamped`
 //! (Levenberg–Marquardt): its trial states add contact couplings, so the tangent's pattern
 //! grows inside an iteration, and a rejected trial must leave the base state's tangent in the
 //! grown pattern (it used to restore the old values and panic in the factorization:
@@ -21,9 +22,9 @@ use plyshell::scene;
 fn flap(kind: &str) -> ([f64; 2], usize, usize, f64, usize) {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("garments/studies/two_ply_flap.ron");
     let shipped = std::fs::read_to_string(&path).expect("the two-ply flap");
-    // The flap as shipped, with its default inter-ply contact (barrier, μ = 0.3).
-    let text = shipped.replace("(name: \"hang\", increments: 8,", &format!("(name: \"hang\", increments: 8, {kind}"));
-    assert!(text.contains(kind) && !text.contains("interply"), "scene edits applied");
+    // The flap with its default inter-ply contact on (barrier, μ = 0.3).
+    let text = shipped.replace("interply: (enabled: false),", "").replace("(name: \"hang\", increments: 8,", &format!("(name: \"hang\", increments: 8, {kind}"));
+    assert!(text.contains(kind) && !text.contains("enabled: false"), "scene edits applied");
     let sc = scene::parse("flap.ron", &text).unwrap_or_else(|e| panic!("{e}"));
     let built = scene::build(&sc, "flap.ron", &text).unwrap_or_else(|e| panic!("{e}"));
     let surface = built.interply.as_ref().expect("inter-ply contact on by default");
@@ -65,9 +66,9 @@ fn ply_summed_seam_force_is_the_weight_below_the_seam() {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("garments/studies/two_ply_flap.ron");
     let shipped = std::fs::read_to_string(&path).expect("the two-ply flap");
     let weight_per_length = (0.15 + 0.10) * 9.81 * 0.10 * 0.04 / 0.04;
-    let off = shipped.replace("        seams: [", "        interply: (enabled: false),\n        seams: [");
-    assert!(off.contains("enabled: false"), "contact turned off");
-    for (label, text) in [("contact off", off), ("contact on", shipped.clone())] {
+    let on = shipped.replace("interply: (enabled: false),", "");
+    assert!(shipped.contains("enabled: false") && !on.contains("enabled: false"), "contact off as shipped, on by default");
+    for (label, text) in [("contact off", shipped.clone()), ("contact on", on)] {
         let sc = scene::parse("flap.ron", &text).unwrap_or_else(|e| panic!("{e}"));
         let built = scene::build(&sc, "flap.ron", &text).unwrap_or_else(|e| panic!("{e}"));
         let summary = analysis::run(&sc, &built, &RunOptions { out_dir: None }, &mut |_| {}).unwrap_or_else(|e| panic!("{label}: {e}"));
