@@ -40,6 +40,24 @@ pub struct RunOptions {
     pub out_dir: Option<PathBuf>,
 }
 
+/// Attaches the scene's nodal-force terms to `solver` for `model` (the built model, or a
+/// seeded copy of it): contact with the rigid bodies, the garment's surface contact
+/// (inter-ply and self contact) and its compliant seams — the same terms for every solve of
+/// the scene's equations (the analysis, and the relaxation and residual of a mapped state in
+/// mesh sequencing and refinement).
+pub fn attach_terms<'m>(solver: &mut Solver<'m>, model: &'m crate::model::Model, built: &BuiltScene) -> Result<(), String> {
+    if let Some(c) = &built.contact {
+        crate::contact::attach(solver, model, c)?;
+    }
+    if let Some(s) = &built.interply {
+        crate::contact::interply::attach(solver, model, s)?;
+    }
+    if let Some(c) = crate::garment::compliant::CompliantSeams::new(&built.seams) {
+        solver.add_nodal_forces(Box::new(c));
+    }
+    Ok(())
+}
+
 /// Solves `built` (from `scene`), reporting progress, and writes VTU/PVD, summary.json and
 /// the monitor plot into the output directory. A first step with `coarse_levels` is solved
 /// by mesh sequencing (`analysis_sequence`), a last step with `refine` by a-posteriori
@@ -82,15 +100,7 @@ pub fn run_from(scene: &Scene, built: &BuiltScene, options: &RunOptions, start: 
     let mut solver = Solver::new(model, scene.solver.clone()).map_err(|e| {
         RunError::Setup(format!("{e}; the model has {} nodes, {} elements and {} free DOFs (set by the parts' mesh counts and the garment's element_size)", model.n_nodes(), model.elements.len(), model.dofs.n_free))
     })?;
-    if let Some(c) = &built.contact {
-        crate::contact::attach(&mut solver, model, c).map_err(RunError::Setup)?;
-    }
-    if let Some(s) = &built.interply {
-        crate::contact::interply::attach(&mut solver, model, s).map_err(RunError::Setup)?;
-    }
-    if let Some(c) = crate::garment::compliant::CompliantSeams::new(&built.seams) {
-        solver.add_nodal_forces(Box::new(c));
-    }
+    attach_terms(&mut solver, model, built).map_err(RunError::Setup)?;
     let (dofs, tangent_nnz, factor_nnz) = solver.sizes();
     let mut summary = Summary {
         scene: scene.name.clone(),

@@ -201,9 +201,7 @@ pub(crate) fn relax_directors(sc: &Scene, b: &BuiltScene, state: &mut State) -> 
 /// step's target loads, with its contact (the measure the step's rest test uses).
 pub fn mapped_residual(sc: &Scene, b: &BuiltScene, state: &mut State) -> Result<f64, String> {
     let mut solver = Solver::new(&b.model, sc.solver.clone()).map_err(|e| e.to_string())?;
-    if let Some(c) = &b.contact {
-        crate::contact::attach(&mut solver, &b.model, c)?;
-    }
+    crate::analysis::attach_terms(&mut solver, &b.model, b)?;
     solver.start_nodal_forces_from(state);
     let scales = b.steps.first().map(|s| s.target_scales.clone()).unwrap_or_default();
     solver.static_residual(state, &scales)

@@ -234,7 +234,11 @@ pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &m
         // Membrane-consistent mapping (`relax`): one proximal stage with the normal spring.
         let cpu_relax = crate::study::cpu_seconds();
         let membrane = if spec.relax_membrane { Some(relax::stage(&sc, &b, &mut mapped, Some(relax::TAU_S)).map_err(fail)?) } else { None };
-        let residual = crate::analysis_sequence::mapped_residual(&sc, &b, &mut mapped).map_err(fail)?;
+        // The stage measured the residual of the state it leaves (a new solver each time).
+        let residual = match &membrane {
+            Some(m) => m.static_residual,
+            None => crate::analysis_sequence::mapped_residual(&sc, &b, &mut mapped).map_err(fail)?,
+        };
         let cpu_relax = crate::study::cpu_seconds() - cpu_relax;
         let last = pass == spec.passes;
         let scales = b.steps.last().map(|s| s.target_scales.clone()).unwrap_or_default();

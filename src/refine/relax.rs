@@ -109,7 +109,8 @@ pub struct Stage {
 }
 
 /// One proximal stage (module doc) on the state `state` of the refined scene (`sc`, `b`)
-/// under its last step's target loads, with its contact: the minimiser of Π + the normal
+/// under its last step's target loads, with the scene's contact and compliant seams
+/// (`analysis::attach_terms`): the minimiser of Π + the normal
 /// spring of time scale `tau` (None: no spring, the minimisation of Π alone from `state`).
 /// A stage that does not converge leaves `state` as it was (`Stage::failed`); Err only when
 /// the solver cannot be set up.
@@ -117,9 +118,7 @@ pub fn stage(sc: &Scene, b: &BuiltScene, state: &mut State, tau: Option<f64>) ->
     let model = &b.model;
     let scales = b.steps.last().map(|s| s.target_scales.clone()).unwrap_or_default();
     let mut solver = Solver::new(model, sc.solver.clone())?;
-    if let Some(c) = &b.contact {
-        crate::contact::attach(&mut solver, model, c)?;
-    }
+    crate::analysis::attach_terms(&mut solver, model, b)?;
     if let Some(tau) = tau {
         let mass = LumpedMass::from_model(model, 1.0).translational;
         solver.add_nodal_forces(Box::new(NormalAnchor {

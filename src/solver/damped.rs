@@ -92,12 +92,7 @@ impl<'m> Solver<'m> {
             // Barrier terms: no further than the collision-free fraction of the correction
             // (continuous collision detection), so that no trial state tunnels through a
             // surface (a state carried across whole would see no barrier at all).
-            let mut fraction = 1.0f64;
-            if self.nodal_forces.iter().any(|c| c.is_barrier()) {
-                let mut full = base.clone();
-                self.model.update(&mut full, &du, 1.0);
-                fraction = self.nodal_forces.iter().map(|c| c.max_step(self.model, &base, &full)).fold(1.0, f64::min);
-            }
+            let fraction = self.collision_free_fraction(&base, &du);
             self.model.update(state, &du, fraction);
             let trial = self.assemble(state, scales, true);
             let accept = match &trial {

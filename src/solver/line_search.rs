@@ -57,12 +57,7 @@ impl<'m> Solver<'m> {
         extra: &mut dyn FnMut(&Self, &State) -> f64,
     ) -> Result<Descent, (Option<usize>, String)> {
         let base = state.clone();
-        let mut s = 1.0f64;
-        if !self.nodal_forces.is_empty() {
-            let mut full = base.clone();
-            self.model.update(&mut full, du, 1.0);
-            s = self.nodal_forces.iter().map(|c| c.max_step(self.model, &base, &full)).fold(1.0, f64::min);
-        }
+        let mut s = self.collision_free_fraction(&base, du);
         // Trust region on the director update: no node turns by more than MAX_ROTATION.
         let turn = self.largest_rotation(du);
         if turn > MAX_ROTATION {

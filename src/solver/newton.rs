@@ -400,12 +400,7 @@ impl<'m> Solver<'m> {
         // Barrier terms: start at the largest collision-free fraction (continuous collision
         // detection), so that no iterate tunnels through a surface between two admissible
         // states.
-        let mut step = 1.0f64;
-        if self.nodal_forces.iter().any(|c| c.is_barrier()) {
-            let mut full = base.clone();
-            self.model.update(&mut full, du, 1.0);
-            step = self.nodal_forces.iter().map(|c| c.max_step(self.model, &base, &full)).fold(1.0, f64::min);
-        }
+        let mut step = self.collision_free_fraction(&base, du);
         let mut last_failure = None;
         for _ in 0..6 {
             *state = base.clone();
@@ -423,6 +418,18 @@ impl<'m> Solver<'m> {
         *state = base;
         self.assembler.forget_mixed();
         Err(last_failure)
+    }
+
+    /// Largest fraction s ∈ [0, 1] of the update `du` from `base` that every barrier term
+    /// allows (continuous collision detection, [`super::NodalForces::max_step`]); 1 without
+    /// barrier terms (the others allow any step).
+    pub(super) fn collision_free_fraction(&self, base: &State, du: &[f64]) -> f64 {
+        if !self.nodal_forces.iter().any(|c| c.is_barrier()) {
+            return 1.0;
+        }
+        let mut full = base.clone();
+        self.model.update(&mut full, du, 1.0);
+        self.nodal_forces.iter().map(|c| c.max_step(self.model, base, &full)).fold(1.0, f64::min)
     }
 
     /// Largest nodal tilt |(δα₁, δα₂)| of the free-DOF increment `du` (radians).
