@@ -170,6 +170,10 @@ enum Command {
         /// three); the discrete reference is always run.
         #[arg(long, value_delimiter = ',')]
         ply_models: Vec<String>,
+        /// A-posteriori refinement (comma-separated tolerances T): per T and per mesh level
+        /// coarser than the reference, a discrete run refined once at T (`refine`).
+        #[arg(long, value_delimiter = ',')]
+        refine: Vec<f64>,
         /// Also write every run's VTU/PVD and summary.json into OUT/<run>/.
         #[arg(long)]
         vtu: bool,
@@ -225,7 +229,7 @@ fn main() -> ExitCode {
         Command::Import { pattern, out, size, units } => import(&pattern, &out, size.as_deref(), units),
         Command::Compare { scenes, out, quiet } => compare(&scenes, &out, quiet),
         Command::Bench { json, quick, drive } => if drive { bench::drive::run_drive(&json, quick) } else { bench::run_all(&json, quick) }.map_err(|e| e.to_string()),
-        Command::Study { scene, out, sizes, tolerances, discrete_only, ply_models, vtu } => (|| {
+        Command::Study { scene, out, sizes, tolerances, discrete_only, ply_models, refine, vtu } => (|| {
             use plyshell::garment::PlyModel;
             let named = ply_models
                 .iter()
@@ -237,7 +241,7 @@ fn main() -> ExitCode {
                 })
                 .collect::<Result<Vec<_>, _>>()?;
             let ply_models = if discrete_only { vec![PlyModel::Discrete] } else if named.is_empty() { vec![PlyModel::Laminate, PlyModel::Auto, PlyModel::Discrete] } else { named };
-            let options = plyshell::study::StudyOptions { sizes, tolerances, ply_models, out: out.clone(), vtu };
+            let options = plyshell::study::StudyOptions { sizes, tolerances, ply_models, refine, out: out.clone(), vtu };
             plyshell::study::run_study(&scene, &options, &mut |m| warn!("{m}")).map(|rows| {
                 say!("{}", plyshell::study::markdown(&scene.display().to_string(), &rows));
                 say!("wrote {}", ["study.md", "study.json", "study.svg"].map(|f| out.join(f).display().to_string()).join(", "));

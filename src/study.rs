@@ -35,6 +35,10 @@ pub struct StudyOptions {
     pub tolerances: Vec<f64>,
     /// Ply models to run (the discrete model is always run at the reference mesh).
     pub ply_models: Vec<PlyModel>,
+    /// A-posteriori refinement tolerances (`refine`): per tolerance T and per mesh level
+    /// coarser than the reference, a discrete run whose last step is refined once at T
+    /// (rows labelled `discrete h×m refined T`).
+    pub refine: Vec<f64>,
     /// Output directory (table, JSON, plot; per-run VTU when `vtu`).
     pub out: PathBuf,
     /// Also write each run's VTU/PVD and summary.json into `out/<label>/`.
@@ -48,7 +52,8 @@ pub struct StudyRow {
     pub label: String,
     /// Ply model ("laminate" / "discrete").
     pub ply_model: String,
-    /// Mesh level: "h×m" or "auto tol".
+    /// Mesh level: "h×m", "auto tol" or "h×m refined tol" (the element sizes and counts are
+    /// then those of the refined mesh).
     pub mesh: String,
     /// Smallest and largest target element size over the panels (m).
     pub element_size: [f64; 2],
@@ -219,8 +224,11 @@ fn clearance(built: &BuiltScene, surface: &Surface) -> Option<(f64, f64)> {
 /// A scene variant: the garment's element size scaled by `m` (or the `Auto` tolerance
 /// `tol`), its ply model set (panel overrides cleared); without a garment, the element size
 /// of every sized part (`SizedAnnulus`, `SizedRectangle`) the same way.
-fn variant(scene: &Scene, m: Option<f64>, tol: Option<f64>, ply: PlyModel) -> Result<Scene, String> {
+fn variant(scene: &Scene, m: Option<f64>, tol: Option<f64>, ply: PlyModel, refine: Option<f64>) -> Result<Scene, String> {
     let mut s = scene.clone();
+    if let (Some(tolerance), Some(last)) = (refine, s.steps.last_mut()) {
+        last.refine = Some(crate::scene::sequence::RefineSpec { tolerance, passes: 1, relax_directors: false, relax_membrane: true });
+    }
     let scale = |e: &ElementSize| -> ElementSize {
         match (e, m, tol) {
             (_, _, Some(t)) => ElementSize::Auto(match e {
@@ -273,13 +281,20 @@ fn solve(file: &str, text: &str, scene: &Scene, label: &str, mesh: String, ply: 
     let build_s = t0.elapsed().as_secs_f64();
     log(&format!("{label}: {} nodes, {} elements, solving…", built.model.n_nodes(), built.model.elements.len()));
     let t1 = Instant::now();
-    let (summary, status) = match analysis::run(scene, &built, &RunOptions { out_dir: out }, &mut |_| {}) {
-        Ok(s) => (s, "completed".to_string()),
-        Err(analysis::RunError::Solve { error, summary }) => (*summary, format!("failed: {error}")),
+    let refined = crate::refine::requested(scene).is_some();
+    let (summary, status, last) = match crate::refine::run_refined(scene, &built, &RunOptions { out_dir: out }, &mut |_| {}) {
+        Ok((s, last)) => (s, "completed".to_string(), last),
+        // A failed refinement pass's state lives on a mesh not returned: no row to measure.
+        Err(analysis::RunError::Solve { error, .. }) if refined => return Err(format!("{label}: {error}")),
+        Err(analysis::RunError::Solve { error, summary }) => (*summary, format!("failed: {error}"), None),
         Err(e) => return Err(format!("{label}: {e}")),
     };
     let timing = Timing { build_s, wall_s: t1.elapsed().as_secs_f64(), cpu_s: cpu_seconds() - c0 };
-    let run = measured_run(label, ply, mesh, &built, &summary, status, timing);
+    let mut run = measured_run(label, ply, mesh, last.as_ref().map_or(&built, |l| &l.1), &summary, status, timing);
+    if let Some(passes) = summary.extra.get("refinement").and_then(|r| r.get("passes")).and_then(|p| p.as_array()) {
+        // Every pass's iterations: the first solve's and each continuation's.
+        run.row.newton_iterations = passes.iter().filter_map(|p| p.get("newton_iterations").and_then(|v| v.as_u64())).sum::<u64>() as usize;
+    }
     log(&format!("{label}: {} DOFs, {} Newton iterations, {:.1} s wall, {:.1} s CPU, {}", run.row.dofs, run.row.newton_iterations, timing.wall_s, timing.cpu_s, run.row.status));
     Ok(run)
 }
@@ -403,28 +418,38 @@ pub fn run_study(path: &Path, options: &StudyOptions, log: &mut dyn FnMut(&str))
     std::fs::create_dir_all(&options.out).map_err(|e| format!("{}: {e}", options.out.display()))?;
     // Run labels: ply model and mesh level ("discrete h×2"); the mesh level alone for parts.
     let label = |p: PlyModel, mesh: &str| if parts_only { mesh.to_string() } else { format!("{} {mesh}", ply_name(p)) };
-    let mut plan: Vec<(String, String, Option<f64>, Option<f64>, PlyModel)> = Vec::new();
+    if let Some(t) = options.refine.iter().find(|t| !(t.is_finite() && **t > 0.0 && **t < 0.5)) {
+        return Err(format!("study: expected refinement tolerances between 0 and 0.5, found {t}"));
+    }
+    // (label, mesh level, size multiplier, Auto tolerance, ply model, refinement tolerance)
+    let mut plan: Vec<(String, String, Option<f64>, Option<f64>, PlyModel, Option<f64>)> = Vec::new();
     for &m in &sizes {
         for &p in &plies {
             if m == finest && p == PlyModel::Discrete {
                 continue;
             }
-            plan.push((label(p, &format!("h×{m}")), format!("h×{m}"), Some(m), None, p));
+            plan.push((label(p, &format!("h×{m}")), format!("h×{m}"), Some(m), None, p, None));
         }
     }
     for &t in &options.tolerances {
         for &p in &plies {
-            plan.push((label(p, &format!("auto {t}")), format!("auto {t}"), None, Some(t), p));
+            plan.push((label(p, &format!("auto {t}")), format!("auto {t}"), None, Some(t), p, None));
         }
     }
-    plan.push((format!("{} (reference)", label(PlyModel::Discrete, &format!("h×{finest}"))), format!("h×{finest}"), Some(finest), None, PlyModel::Discrete));
+    for &t in &options.refine {
+        for &m in sizes.iter().filter(|&&m| m != finest) {
+            let mesh = format!("h×{m} refined {t}");
+            plan.push((label(PlyModel::Discrete, &mesh), mesh, Some(m), None, PlyModel::Discrete, Some(t)));
+        }
+    }
+    plan.push((format!("{} (reference)", label(PlyModel::Discrete, &format!("h×{finest}"))), format!("h×{finest}"), Some(finest), None, PlyModel::Discrete, None));
     // A variant that cannot be built (e.g. a stitch line passing no node of a coarse mesh)
     // is a failed row; the reference must build.
     let n_plan = plan.len();
     let mut runs = Vec::new();
     let mut failed: Vec<(usize, StudyRow)> = Vec::new();
-    for (i, (label, mesh, m, tol, ply)) in plan.into_iter().enumerate() {
-        let sc = variant(&base, m, tol, ply)?;
+    for (i, (label, mesh, m, tol, ply, refine)) in plan.into_iter().enumerate() {
+        let sc = variant(&base, m, tol, ply, refine)?;
         let dir = options.vtu.then(|| options.out.join(label.replace([' ', '×', '(', ')'], "_").replace("__", "_").trim_matches('_').to_string()));
         match solve(&file, &text, &sc, &label, mesh.clone(), ply, dir, log) {
             Ok(r) => runs.push((i, r)),
@@ -527,8 +552,9 @@ fn write_reports(dir: &Path, scene: &str, rows: &[StudyRow]) -> Result<(), Strin
     let json = serde_json::to_vec_pretty(&serde_json::json!({ "scene": scene, "runs": rows })).map_err(|e| e.to_string())?;
     crate::io::atomic::write_atomic(&dir.join("study.json"), &json).map_err(|e| format!("study.json: {e}"))?;
     let mut series: Vec<Series> = Vec::new();
-    for (name, pick) in [("uniform refinement", "h×"), ("Auto size", "auto 0."), ("laminate", "laminate h"), ("Auto plies", "auto h"), ("discrete", "discrete h"), ("laminate, Auto size", "laminate auto"), ("Auto plies, Auto size", "auto auto"), ("discrete, Auto size", "discrete auto")] {
-        let points: Vec<(f64, f64)> = rows.iter().filter(|r| r.label.starts_with(pick) && r.shape_rms > 0.0 && r.wall_s > 0.0).map(|r| (r.wall_s, 100.0 * r.shape_rms)).collect();
+    // Series by label prefix; refined runs (`… refined T`) in a series of their own.
+    for (name, pick, refined) in [("uniform refinement", "h×", false), ("Auto size", "auto 0.", false), ("laminate", "laminate h", false), ("Auto plies", "auto h", false), ("discrete", "discrete h", false), ("laminate, Auto size", "laminate auto", false), ("Auto plies, Auto size", "auto auto", false), ("discrete, Auto size", "discrete auto", false), ("discrete, refined", "discrete h", true), ("refined", "h×", true)] {
+        let points: Vec<(f64, f64)> = rows.iter().filter(|r| r.label.starts_with(pick) && r.mesh.contains("refined") == refined && r.shape_rms > 0.0 && r.wall_s > 0.0).map(|r| (r.wall_s, 100.0 * r.shape_rms)).collect();
         if !points.is_empty() {
             series.push(Series { name: name.into(), points, reference: false });
         }

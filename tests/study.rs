@@ -9,7 +9,7 @@ use plyshell::study::{run_study, StudyOptions};
 #[test]
 fn study_of_a_two_ply_flap_writes_a_table_with_a_zero_error_reference() {
     let out = std::env::temp_dir().join(format!("plyshell_study_{}", std::process::id()));
-    let options = StudyOptions { sizes: vec![2.0, 1.0], tolerances: vec![], ply_models: vec![PlyModel::Laminate, PlyModel::Discrete], out: out.clone(), vtu: false };
+    let options = StudyOptions { sizes: vec![2.0, 1.0], tolerances: vec![], ply_models: vec![PlyModel::Laminate, PlyModel::Discrete], refine: vec![], out: out.clone(), vtu: false };
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("garments/studies/two_ply_flap.ron");
     let rows = run_study(&path, &options, &mut |m| println!("{m}")).unwrap_or_else(|e| panic!("{e}"));
     println!("{}", plyshell::study::markdown("two_ply_flap", &rows));
@@ -59,7 +59,7 @@ fn study_of_a_sized_part_varies_its_element_size() {
     let path = dir.join("strip.ron");
     std::fs::write(&path, text).expect("scene written");
     let out = dir.join("out");
-    let options = StudyOptions { sizes: vec![4.0, 1.0], tolerances: vec![0.05], ply_models: vec![PlyModel::Laminate, PlyModel::Discrete], out: out.clone(), vtu: false };
+    let options = StudyOptions { sizes: vec![4.0, 1.0], tolerances: vec![0.05], ply_models: vec![PlyModel::Laminate, PlyModel::Discrete], refine: vec![], out: out.clone(), vtu: false };
     let rows = run_study(&path, &options, &mut |m| println!("{m}")).unwrap_or_else(|e| panic!("{e}"));
     println!("{}", plyshell::study::markdown("strip", &rows));
     let labels: Vec<&str> = rows.iter().map(|r| r.label.as_str()).collect();
@@ -76,5 +76,40 @@ fn study_of_a_sized_part_varies_its_element_size() {
     // The finer Auto mesh is closer to the reference than the coarse one (mesh convergence).
     assert!(rows[1].dofs > rows[0].dofs && rows[1].shape_rms < rows[0].shape_rms, "{} vs {}", rows[1].shape_rms, rows[0].shape_rms);
     assert!(out.join("study.md").is_file() && out.join("study.json").is_file() && out.join("study.svg").is_file());
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// `plyshell study --refine T`: a run per coarse mesh level refined once a posteriori
+/// (`refine`: indicator of the rest state → graded mesh → mapped state → continued solve),
+/// measured on the refined mesh. On the cotton strip of the test above (a Peirce cantilever)
+/// the 2 cm mesh refined at T = 0.002 is within a tenth of the 2 cm mesh's shape error of the
+/// 5 mm reference (measured: 0.416 % → 0.003 % RMS) with fewer DOFs than the reference (450
+/// against 1000), and its Newton count is both passes'.
+#[test]
+fn study_refines_a_coarse_level_a_posteriori() {
+    let text = r#"Scene(
+    name: "strip",
+    materials: {"fabric": Fabric((preset: Some("cotton_broadcloth")))},
+    parts: [(name: "strip", mesh: SizedRectangle(lx: 0.2, ly: 0.02, element_size: 0.01), material: "fabric", thickness: 0.3e-3)],
+    node_sets: {"root": Edge(part: "strip", edge: "xmin")},
+    boundary: [Clamp(set: "root")],
+    loads: {"weight": SelfWeight(part: "strip", g: (0.0, 0.0, -9.81))},
+    steps: [(name: "sag", increments: 4, scale: {"weight": 1.0})],
+    output: (vtu: false),
+)"#;
+    let dir = std::env::temp_dir().join(format!("plyshell_study_refine_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let path = dir.join("strip.ron");
+    std::fs::write(&path, text).expect("scene written");
+    let options = StudyOptions { sizes: vec![2.0, 0.5], tolerances: vec![], ply_models: vec![PlyModel::Discrete], refine: vec![0.002], out: dir.join("out"), vtu: false };
+    let rows = run_study(&path, &options, &mut |m| println!("{m}")).unwrap_or_else(|e| panic!("{e}"));
+    println!("{}", plyshell::study::markdown("strip", &rows));
+    let labels: Vec<&str> = rows.iter().map(|r| r.label.as_str()).collect();
+    assert_eq!(labels, ["h×2", "h×2 refined 0.002", "h×0.5 (reference)"]);
+    assert!(rows.iter().all(|r| r.status == "completed"), "{labels:?}");
+    let (coarse, refined, reference) = (&rows[0], &rows[1], &rows[2]);
+    assert!(refined.dofs > coarse.dofs && refined.dofs < reference.dofs, "DOFs {} / {} / {}", coarse.dofs, refined.dofs, reference.dofs);
+    assert!(refined.shape_rms < 0.1 * coarse.shape_rms, "shape RMS {} refined against {} unrefined", refined.shape_rms, coarse.shape_rms);
+    assert!(refined.newton_iterations > coarse.newton_iterations, "{} vs {}", refined.newton_iterations, coarse.newton_iterations);
     let _ = std::fs::remove_dir_all(&dir);
 }

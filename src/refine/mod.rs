@@ -201,8 +201,14 @@ fn build_refined(sc: &Scene, original: &BuiltScene, fields: Option<Vec<crate::ga
 /// Solves `scene` with the refinement passes of its last step (module doc); the summary is
 /// the last pass's, with `refinement` added. Writes files only for the last pass.
 pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &mut dyn FnMut(&Progress)) -> Result<Summary, RunError> {
+    run_refined(scene, built, options, progress).map(|r| r.0)
+}
+
+/// [`run`], also returning the last pass's scene and model (None without refinement: the
+/// summary is then of `built` itself), whose mesh the summary's final state lives on.
+pub fn run_refined(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &mut dyn FnMut(&Progress)) -> Result<(Summary, Option<(Scene, BuiltScene)>), RunError> {
     let Some(spec) = requested(scene).cloned() else {
-        return crate::analysis::run_unrefined(scene, built, options, progress);
+        return crate::analysis::run_unrefined(scene, built, options, progress).map(|s| (s, None));
     };
     let cpu0 = crate::study::cpu_seconds();
     let first = crate::analysis::run_unrefined(scene, built, &RunOptions::default(), progress)?;
@@ -297,7 +303,7 @@ pub fn run(scene: &Scene, built: &BuiltScene, options: &RunOptions, progress: &m
                 let text = serde_json::to_vec_pretty(&summary).map_err(|e| RunError::Io(e.to_string()))?;
                 crate::io::atomic::write_atomic(&dir.join("summary.json"), &text).map_err(|e| RunError::Io(e.to_string()))?;
             }
-            return Ok(summary);
+            return Ok((summary, Some((sc, b))));
         }
         current = Some((sc, b));
     }
