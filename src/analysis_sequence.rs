@@ -198,11 +198,31 @@ pub(crate) fn relax_directors(sc: &Scene, b: &BuiltScene, state: &mut State) -> 
 }
 
 /// Relative static residual of the mapped `state` on the scene's model under its first
-/// step's target loads, with its contact (the measure the step's rest test uses).
+/// step's target loads, with its contact (the measure the step's rest test uses). A
+/// non-finite residual is an error naming the term that makes it so (mapped plies that
+/// touch or intersect give an infinite inter-ply barrier), not a number for the next solve
+/// to fail on.
 pub fn mapped_residual(sc: &Scene, b: &BuiltScene, state: &mut State) -> Result<f64, String> {
-    let mut solver = Solver::new(&b.model, sc.solver.clone()).map_err(|e| e.to_string())?;
-    crate::analysis::attach_terms(&mut solver, &b.model, b)?;
-    solver.start_nodal_forces_from(state);
-    let scales = b.steps.first().map(|s| s.target_scales.clone()).unwrap_or_default();
-    solver.static_residual(state, &scales)
+    let residual = |b: &BuiltScene, state: &mut State| -> Result<f64, String> {
+        let mut solver = Solver::new(&b.model, sc.solver.clone()).map_err(|e| e.to_string())?;
+        crate::analysis::attach_terms(&mut solver, &b.model, b)?;
+        solver.start_nodal_forces_from(state);
+        let scales = b.steps.first().map(|s| s.target_scales.clone()).unwrap_or_default();
+        solver.static_residual(state, &scales)
+    };
+    let r = residual(b, state)?;
+    if r.is_finite() {
+        return Ok(r);
+    }
+    // Which term: the model alone, then with each kind of contact.
+    let bare = BuiltScene { contact: None, interply: None, ..b.clone() };
+    if !residual(&bare, &mut state.clone())?.is_finite() {
+        return Err("the mapped state's residual is not finite without contact: an element or a seam of the new mesh".into());
+    }
+    let culprit = if b.interply.is_some() && !residual(&BuiltScene { contact: None, ..b.clone() }, &mut state.clone())?.is_finite() {
+        "inter-ply or self contact: mapped plies touch or intersect (a pair at zero distance or less, where the barrier is infinite)"
+    } else {
+        "body contact: a mapped node's face is on or inside a body"
+    };
+    Err(format!("the mapped state's residual is not finite: {culprit}"))
 }
