@@ -150,7 +150,17 @@ impl Solver<'_> {
                         self.assembler.mixed = false;
                         self.assembler.forget_mixed();
                         let ds = super::DynamicSettings::default();
-                        self.run_dynamic_step(si, step, &ds, &at(tau), state, on_increment, progress, 0.0, 1.0)?;
+                        // Its time steps continue the step's increments: numbered on, their
+                        // times (the step index plus the fraction t / max_time of the
+                        // Dynamic step, 1 at rest) mapped onto the rest of the step.
+                        let (tau0, inc0) = (tau, inc);
+                        let mut relaxed = |r: &IncrementReport, s: &State, solver: &Self| {
+                            let mut r = r.clone();
+                            r.increment += inc0;
+                            r.time = si as f64 + tau0 + (1.0 - tau0) * (r.time - si as f64);
+                            on_increment(&r, s, solver);
+                        };
+                        self.run_dynamic_step(si, step, &ds, &at(tau), state, &mut relaxed, progress, 0.0, 1.0)?;
                         return Ok(step.target_scales.clone());
                     }
                     if dtau < min_dtau * (1.0 - 1e-9) {
