@@ -1,6 +1,5 @@
 //! Static steps with barrier inter-ply contact on the two-ply flap
-//! (`garments/studies/two_ply_flap.ron` with its contact on; it ships with contact off, see
-//! its header). (1) `StaticDamped`
+//! (`garments/studies/two_ply_flap.ron`, which ships with its default contact on). (1) `StaticDamped`
 //! (Levenberg–Marquardt): its trial states add contact couplings, so the tangent's pattern
 //! grows inside an iteration, and a rejected trial must leave the base state's tangent in the
 //! grown pattern (it used to restore the old values and panic in the factorization:
@@ -66,9 +65,9 @@ fn ply_summed_seam_force_is_the_weight_below_the_seam() {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("garments/studies/two_ply_flap.ron");
     let shipped = std::fs::read_to_string(&path).expect("the two-ply flap");
     let weight_per_length = (0.15 + 0.10) * 9.81 * 0.10 * 0.04 / 0.04;
-    let on = shipped.replace("interply: (enabled: false),", "");
-    assert!(shipped.contains("enabled: false") && !on.contains("enabled: false"), "contact off as shipped, on by default");
-    for (label, text) in [("contact off", shipped.clone()), ("contact on", on)] {
+    let off = shipped.replace("        stitch_lines: [", "        interply: (enabled: false),\n        stitch_lines: [");
+    assert!(!shipped.contains("enabled: false") && off.contains("interply: (enabled: false)"), "contact on as shipped, off by the edit");
+    for (label, text) in [("contact off", off), ("contact on", shipped.clone())] {
         let sc = scene::parse("flap.ron", &text).unwrap_or_else(|e| panic!("{e}"));
         let built = scene::build(&sc, "flap.ron", &text).unwrap_or_else(|e| panic!("{e}"));
         let summary = analysis::run(&sc, &built, &RunOptions { out_dir: None }, &mut |_| {}).unwrap_or_else(|e| panic!("{label}: {e}"));
