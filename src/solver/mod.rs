@@ -17,6 +17,8 @@ pub mod nodal;
 mod report;
 mod reuse;
 mod saddle;
+mod separator;
+mod split_cholesky;
 mod time_step;
 
 pub use chord::ChordSettings;
