@@ -21,6 +21,7 @@ use faer::sparse::{SparseColMatRef, SymbolicSparseColMat, SymbolicSparseColMatRe
 use faer::{Conj, MatMut, Par, Side};
 
 use super::separator::{dissect, SEP};
+pub use super::split_cholesky::thread_cpu_seconds;
 use super::split_cholesky::SplitCholesky;
 use crate::assembly::Pattern;
 
@@ -139,8 +140,8 @@ impl SparseCholesky {
         self.split.as_ref().map(|s| s.separator_len())
     }
 
-    /// Seconds of the last split factorization: half 1, half 2 (each on its core), and the
-    /// dense Schur complement's assembly and LLᵀ; None without the split.
+    /// CPU seconds of the last split factorization: half 1, half 2 (each on its core), and
+    /// the dense Schur complement's assembly and LLᵀ; None without the split.
     pub fn split_profile(&self) -> Option<[f64; 3]> {
         self.split.as_ref().map(|s| s.profile)
     }
