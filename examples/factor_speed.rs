@@ -3,8 +3,10 @@
 //! split one (two threads: one level of nested dissection, the two halves on two cores and a
 //! dense Schur complement, `src/solver/split_cholesky.rs`).
 //!
-//! `cargo run --release --example factor_speed -- [M ...] [--repeats R]` (default M = 32 64
-//! 100 200; a trailing `x2` on M, e.g. `64x2`, takes two disconnected M×M grids). Per size:
+//! `cargo run --release --example factor_speed -- [M ... | SCENE.ron ...] [--repeats R]`
+//! (default M = 32 64 100 200; a trailing `x2` on M, e.g. `64x2`, takes two disconnected M×M
+//! grids; a scene file takes its model's initial tangent pattern, without contact couplings,
+//! with diagonally dominant values). Per size:
 //! equations, factor entries, separator size, symbolic analysis (process CPU seconds), numeric
 //! LLᵀ (median of R repeats: CPU seconds of the one thread, and wall), the split's halves and
 //! Schur part (CPU seconds of each on its thread, the last of the fastest repeat), its critical
@@ -96,6 +98,33 @@ fn grid5(m: usize, copies: usize) -> (Pattern, Vec<f64>) {
     (Pattern { n: nn * 5, col_ptr, row_idx }, values)
 }
 
+/// The scene's initial tangent pattern with diagonally dominant values (each diagonal entry
+/// one more than its row's off-diagonal magnitudes).
+fn scene_pattern(path: &str) -> Result<(Pattern, Vec<f64>), String> {
+    let (_, built) = plyshell::scene::load(std::path::Path::new(path)).map_err(|e| e.to_string())?;
+    let p = plyshell::assembly::Assembler::new(&built.model).pattern.clone();
+    let mut values = vec![0.0; p.row_idx.len()];
+    let mut row_sum = vec![1.0; p.n];
+    for c in 0..p.n {
+        for s in p.col_ptr[c]..p.col_ptr[c + 1] {
+            let r = p.row_idx[s];
+            if r != c {
+                values[s] = -1.0 / (1.0 + ((r * 7 + c) % 5) as f64);
+                row_sum[r] -= values[s];
+                row_sum[c] -= values[s];
+            }
+        }
+    }
+    for c in 0..p.n {
+        for s in p.col_ptr[c]..p.col_ptr[c + 1] {
+            if p.row_idx[s] == c {
+                values[s] = row_sum[c];
+            }
+        }
+    }
+    Ok((p, values))
+}
+
 fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);
     v[v.len() / 2]
@@ -146,10 +175,14 @@ fn main() -> Result<(), String> {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let mut repeats = 7;
     let mut sizes = Vec::new();
+    let mut scenes = Vec::new();
     let mut it = args.iter();
     while let Some(a) = it.next() {
         if a == "--repeats" {
             repeats = it.next().and_then(|s| s.parse().ok()).ok_or("--repeats takes a number")?;
+        } else if a.ends_with(".ron") {
+            sizes.push((0, 0));
+            scenes.push(a.clone());
         } else {
             let (m, copies) = a.split_once('x').map_or((a.as_str(), "1"), |(m, c)| (m, c));
             sizes.push((m.parse::<usize>().map_err(|e| format!("{a}: {e}"))?, copies.parse::<usize>().map_err(|e| format!("{a}: {e}"))?));
@@ -160,15 +193,16 @@ fn main() -> Result<(), String> {
     }
     rayon::ThreadPoolBuilder::new().num_threads(2).build_global().map_err(|e| e.to_string())?;
     println!("grid      equations  factor 1t   factor 2t   |Σ|  symbolic 1t  2t  | numeric 1t (CPU  wall) | 2t halves (CPU)  Schur  path   wall | speed-up path  wall | solve 1t   2t | residual 1t / 2t");
+    let mut scenes = scenes.into_iter();
     for (m, copies) in sizes {
-        let (p, v) = grid5(m, copies);
+        let (p, v) = if copies == 0 { scene_pattern(&scenes.next().unwrap_or_default())? } else { grid5(m, copies) };
         let mono = run(&p, &v, 1, repeats)?;
         let split = run(&p, &v, 2, repeats)?;
         let [h1, h2, s] = split.profile.unwrap_or([f64::NAN; 3]);
         let path = h1.max(h2) + s;
+        let name = if copies == 0 { "scene".to_string() } else { format!("{m:>4}²×{copies}") };
         println!(
-            "{:>4}²×{copies} {:>9} {:>10} {:>10} {:>5}  {:>6.3} {:>6.3}  | {:>8.4} {:>8.4} | {:>7.4} {:>7.4} {:>6.4} {:>6.4} {:>6.4} | {:>8.2}× {:>5.2}× | {:>6.4} {:>6.4} | {:.1e} / {:.1e}",
-            m,
+            "{name:>7} {:>9} {:>10} {:>10} {:>5}  {:>6.3} {:>6.3}  | {:>8.4} {:>8.4} | {:>7.4} {:>7.4} {:>6.4} {:>6.4} {:>6.4} | {:>8.2}× {:>5.2}× | {:>6.4} {:>6.4} | {:.1e} / {:.1e}",
             p.n,
             mono.nnz,
             split.nnz,

@@ -6,8 +6,9 @@
 //! With two or more threads and a large enough system with a small, balanced separator, the
 //! numeric LLᵀ is split in two halves factorized on two cores at once
 //! (`split_cholesky.rs`, one level of nested dissection with a dense Schur complement); an
-//! LLᵀ failure there falls back to the monolithic LLᵀ/LDLᵀ, whose symbolic analysis is then
-//! made once and kept. faer's own parallel numeric factorization is not used: on the 2-core
+//! LLᵀ failure there falls back to the monolithic LLᵀ/LDLᵀ. The monolithic symbolic analysis
+//! is always made (its factor's work decides whether the split pays); its storage is
+//! allocated on first use. faer's own parallel numeric factorization is not used: on the 2-core
 //! machine it was slower than the sequential one at every size (see `factor_threads`).
 
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
@@ -32,6 +33,13 @@ pub const SPLIT_MIN_EQUATIONS: usize = 4000;
 const SPLIT_MAX_SEPARATOR: f64 = 0.05;
 /// Smallest half, as a fraction of the equations outside the separator.
 const SPLIT_MIN_HALF: f64 = 0.35;
+/// Largest |Σ|³ (the order of the split's dense work: the separator's blocks of the two
+/// halves, their products S_k and the factorization of S, each about |Σ|³/3 multiply-adds)
+/// against the monolithic factor's Σ c_j². Measured: ≈ 0.05 on 5-DOF grids from 32² to
+/// 100², where the split's critical path is 1.9–2.1× shorter; ≈ 1.0 on the three-ply
+/// `nbc_hood.ron` and `nbc_sleeve_on_arm.ron` tangents, whose plies AMD orders almost
+/// independently while a level-set separator cuts through all three (1.0–1.15×).
+const SPLIT_MAX_DENSE_WORK: f64 = 0.25;
 
 /// Which factorization the last numeric step produced.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -67,11 +75,42 @@ struct Monolithic {
     buffer: MemBuffer,
 }
 
+/// AMD ordering and symbolic analysis of the monolithic factorization.
+fn monolithic_symbolic(sym: SymbolicSparseColMatRef<'_, usize>) -> Result<SymbolicCholesky<usize>, LinearError> {
+    let n = sym.nrows();
+    factorize_symbolic_cholesky(sym, Side::Upper, SymmetricOrdering::Amd, CholeskySymbolicParams::default())
+        .map_err(|e| LinearError::Symbolic(format!("{e:?} (analysing {n} equations with {} stored entries)", sym.row_idx().len())))
+}
+
+/// Σ c_j² over the columns of the factor (c_j the column's entries): proportional to the
+/// numeric factorization's floating-point work (George & Liu 1981, §2.2: Σ c_j(c_j + 3)/2
+/// multiplications for LLᵀ).
+fn factor_work(symbolic: &SymbolicCholesky<usize>) -> f64 {
+    let mut work = 0.0;
+    match symbolic.raw() {
+        SymbolicCholeskyRaw::Simplicial(sym) => {
+            let cp = sym.col_ptr();
+            for j in 0..sym.ncols() {
+                work += ((cp[j + 1] - cp[j]) as f64).powi(2);
+            }
+        }
+        SymbolicCholeskyRaw::Supernodal(sym) => {
+            for k in 0..sym.n_supernodes() {
+                let w = sym.supernode_end()[k] - sym.supernode_begin()[k];
+                let below = sym.supernode(k).pattern().len();
+                for t in 0..w {
+                    work += ((w - t + below) as f64).powi(2);
+                }
+            }
+        }
+    }
+    work
+}
+
 impl Monolithic {
-    fn analyse(sym: SymbolicSparseColMatRef<'_, usize>) -> Result<Self, LinearError> {
-        let n = sym.nrows();
-        let symbolic = factorize_symbolic_cholesky(sym, Side::Upper, SymmetricOrdering::Amd, CholeskySymbolicParams::default())
-            .map_err(|e| LinearError::Symbolic(format!("{e:?} (analysing {n} equations with {} stored entries)", sym.row_idx().len())))?;
+    /// Allocates the factor's storage and workspace for the analysed `symbolic`.
+    fn new(symbolic: SymbolicCholesky<usize>) -> Result<Self, LinearError> {
+        let n = symbolic.nrows();
         // The factor's size is known now, before its storage is allocated: check it against
         // the memory budget and allocate fallibly (an abort is never the answer).
         let len = symbolic.len_val();
@@ -97,13 +136,18 @@ pub struct SparseCholesky {
     pattern: SymbolicSparseColMat<usize>,
     /// The two-core split factorization, if the pattern has a good separator.
     split: Option<SplitCholesky>,
-    /// The monolithic factorization: analysed at once without a split, lazily otherwise.
+    /// The monolithic factorization: allocated at once without a split, on first use
+    /// otherwise (from `mono_symbolic`).
     mono: Option<Monolithic>,
+    mono_symbolic: Option<SymbolicCholesky<usize>>,
     /// The last successful numeric factorization is the split one.
     split_active: bool,
     kind: FactorKind,
     /// Matrix values of the factorization held, if it succeeded.
     factored: Option<Vec<f64>>,
+    /// CPU seconds on the numeric factorizations' critical path so far: the calling
+    /// thread's for the monolithic one, max(halves) + Schur for the split one.
+    cpu_path: f64,
 }
 
 impl SparseCholesky {
@@ -112,14 +156,16 @@ impl SparseCholesky {
     pub fn analyse(pattern: &Pattern, threads: usize) -> Result<Self, LinearError> {
         let n = pattern.n;
         let sym = SymbolicSparseColMat::new_checked(n, n, pattern.col_ptr.clone(), None, pattern.row_idx.clone());
-        let split = if threads >= 2 && n >= SPLIT_MIN_EQUATIONS { Self::analyse_split(pattern)? } else { None };
-        let mono = if split.is_none() { Some(Monolithic::analyse(sym.as_ref())?) } else { None };
-        Ok(Self { pattern: sym, split, mono, split_active: false, kind: FactorKind::Llt, factored: None })
+        let symbolic = monolithic_symbolic(sym.as_ref())?;
+        let split = if threads >= 2 && n >= SPLIT_MIN_EQUATIONS { Self::analyse_split(pattern, factor_work(&symbolic))? } else { None };
+        let (mono, mono_symbolic) = if split.is_none() { (Some(Monolithic::new(symbolic)?), None) } else { (None, Some(symbolic)) };
+        Ok(Self { pattern: sym, split, mono, mono_symbolic, split_active: false, kind: FactorKind::Llt, factored: None, cpu_path: 0.0 })
     }
 
-    /// The split analysis if the pattern's separator is small (≤ 5 % of the equations) and
-    /// balanced (each half ≥ 35 % of the rest); None otherwise.
-    fn analyse_split(pattern: &Pattern) -> Result<Option<SplitCholesky>, LinearError> {
+    /// The split analysis if the pattern's separator is small (≤ 5 % of the equations),
+    /// balanced (each half ≥ 35 % of the rest) and its dense work |Σ|³ small against the
+    /// monolithic factorization's `mono_work` ([`factor_work`]); None otherwise.
+    fn analyse_split(pattern: &Pattern, mono_work: f64) -> Result<Option<SplitCholesky>, LinearError> {
         let n = pattern.n;
         let part = dissect(n, &pattern.col_ptr, &pattern.row_idx);
         let mut counts = [0usize; 3];
@@ -127,7 +173,8 @@ impl SparseCholesky {
         let rest = (n - counts[SEP as usize]) as f64;
         let small = counts[SEP as usize] as f64 <= SPLIT_MAX_SEPARATOR * n as f64;
         let balanced = counts[0].min(counts[1]) as f64 >= SPLIT_MIN_HALF * rest;
-        if !(small && balanced) {
+        let dense = (counts[SEP as usize] as f64).powi(3);
+        if !(small && balanced && dense <= SPLIT_MAX_DENSE_WORK * mono_work) {
             return Ok(None);
         }
         let split = SplitCholesky::analyse(n, &pattern.col_ptr, &pattern.row_idx, &part).map_err(|e| LinearError::Symbolic(format!("{e} (splitting {n} equations)")))?;
@@ -146,10 +193,26 @@ impl SparseCholesky {
         self.split.as_ref().map(|s| s.profile)
     }
 
+    /// CPU seconds on the critical path of the numeric factorizations so far (what the
+    /// factorizations take on free cores; a shared machine inflates their wall time).
+    pub fn cpu_path_seconds(&self) -> f64 {
+        self.cpu_path
+    }
+
+    /// Takes over the critical-path CPU time of the factorizations of `old` (a solver for
+    /// the pattern this one's grew from).
+    pub fn carry_cpu_path(&mut self, old: &SparseCholesky) {
+        self.cpu_path += old.cpu_path;
+    }
+
     /// The monolithic factorization, analysed on first use.
     fn mono(&mut self) -> Result<&mut Monolithic, LinearError> {
         if self.mono.is_none() {
-            self.mono = Some(Monolithic::analyse(self.pattern.as_ref())?);
+            let symbolic = match self.mono_symbolic.take() {
+                Some(s) => s,
+                None => monolithic_symbolic(self.pattern.as_ref())?,
+            };
+            self.mono = Some(Monolithic::new(symbolic)?);
         }
         self.mono.as_mut().ok_or(LinearError::Singular)
     }
@@ -212,24 +275,27 @@ impl SparseCholesky {
     /// LLᵀ by the split factorization if there is one, else (or if it met a non-positive
     /// pivot) by the monolithic one; false if the matrix is not positive definite.
     fn factorize_llt(&mut self, values: &[f64]) -> bool {
+        let t = thread_cpu_seconds();
         if let Some(split) = &mut self.split {
             // A failure of the split's LLᵀ means A is not positive definite (each bordered
             // half is a principal submatrix's congruent, S its Schur complement); the
             // monolithic LDLᵀ below gives the inertia.
-            if split.factorize(values) {
-                self.split_active = true;
-                return true;
-            }
-            self.split_active = false;
-            return false;
+            let ok = split.factorize(values);
+            let [h1, h2, s] = split.profile;
+            self.cpu_path += h1.max(h2) + s + (thread_cpu_seconds() - t);
+            self.split_active = ok;
+            return ok;
         }
         self.split_active = false;
         let pattern = &self.pattern;
         let Some(mono) = self.mono.as_mut() else { return false };
         let a = SparseColMatRef::new(pattern.as_ref(), values);
-        mono.symbolic
+        let ok = mono
+            .symbolic
             .factorize_numeric_llt::<f64>(&mut mono.l_values, a, Side::Upper, LltRegularization::default(), Par::Seq, MemStack::new(&mut mono.buffer), Default::default())
-            .is_ok()
+            .is_ok();
+        self.cpu_path += thread_cpu_seconds() - t;
+        ok
     }
 
     fn factorize_numeric(&mut self, values: &[f64]) -> Result<FactorKind, LinearError> {
@@ -237,6 +303,7 @@ impl SparseCholesky {
             self.kind = FactorKind::Llt;
             return Ok(FactorKind::Llt);
         }
+        let t = thread_cpu_seconds();
         self.mono()?;
         let pattern = &self.pattern;
         let mono = self.mono.as_mut().ok_or(LinearError::Singular)?;
@@ -244,6 +311,7 @@ impl SparseCholesky {
         mono.symbolic
             .factorize_numeric_ldlt::<f64>(&mut mono.l_values, a, Side::Upper, LdltRegularization::default(), Par::Seq, MemStack::new(&mut mono.buffer), Default::default())
             .map_err(|_| LinearError::Singular)?;
+        self.cpu_path += thread_cpu_seconds() - t;
         self.split_active = false;
         self.kind = FactorKind::Ldlt;
         Ok(FactorKind::Ldlt)

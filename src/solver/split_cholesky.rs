@@ -461,9 +461,21 @@ mod tests {
     /// plus `shift`·I, K₅ coupling three stiff (1e3) and two soft (1) DOFs like a shell's
     /// translations and rotations; positive definite for shift > 0.
     fn grid5(m: usize, copies: usize, shift: f64) -> (Pattern, Vec<f64>) {
+        plies(m, copies, 0, shift)
+    }
+
+    /// [`grid5`] with the copies stacked as plies and tied node to node at every
+    /// `tie_every`-th node (0: no ties), like quilted plies.
+    fn plies(m: usize, copies: usize, tie_every: usize, shift: f64) -> (Pattern, Vec<f64>) {
         let per = m * (m + 1);
         let nn = per * copies;
         let mut adj: Vec<Vec<usize>> = vec![Vec::new(); nn];
+        for a in (0..per).filter(|a| tie_every > 0 && a % tie_every == 0) {
+            for c in 1..copies {
+                adj[a + (c - 1) * per].push(a + c * per);
+                adj[a + c * per].push(a + (c - 1) * per);
+            }
+        }
         for cpy in 0..copies {
             let eqn = |i: usize, j: usize| if i == 0 { usize::MAX } else { cpy * per + j * m + (i - 1) };
             for j in 0..m {
@@ -604,6 +616,22 @@ mod tests {
         let mut x = b.clone();
         split.solve(&mut x);
         assert!(relative_residual(&split, &v, &x, &b) < 1e-13);
+    }
+
+    /// Three 30² plies quilted together at every 37th node: the level-set separator cuts
+    /// through all three plies (|Σ| = 450, 3 % of the equations, balanced) while AMD orders
+    /// the plies almost independently, so the split's dense work |Σ|³ is large against the
+    /// monolithic factor's and the monolithic factorization is kept.
+    #[test]
+    fn quilted_plies_stay_monolithic() {
+        let (p, v) = plies(30, 3, 37, 1e-4);
+        let mut chol = SparseCholesky::analyse(&p, 2).unwrap();
+        assert!(chol.separator_len().is_none());
+        assert_eq!(chol.factorize(&v).unwrap(), FactorKind::Llt);
+        let b = rhs(p.n);
+        let mut x = b.clone();
+        chol.solve(&mut x);
+        assert!(relative_residual(&chol, &v, &x, &b) < 1e-13);
     }
 
     /// Small systems, and patterns without a small balanced separator (an arrow matrix: one
