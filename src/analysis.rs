@@ -258,6 +258,7 @@ pub fn run_from(scene: &Scene, built: &BuiltScene, options: &RunOptions, start: 
         progress,
     );
     summary.timings = solver.timings.clone();
+    summary.timings.factorization_cpu_path = solver.factorization_cpu_path();
     // Output problems after the solve: reported, but never a reason to skip summary.json.
     let mut problems: Vec<String> = io_error.into_iter().collect();
     if let Some(c) = &built.contact {

@@ -116,7 +116,8 @@ impl<'m> Solver<'m> {
         let (pattern, pos) = self.assembler.pattern.with_pairs(self.model, &added);
         let threads = if self.settings.factor_threads == 0 { rayon::current_num_threads() } else { self.settings.factor_threads };
         let grown = match SparseCholesky::analyse(&pattern, threads) {
-            Ok(cholesky) => {
+            Ok(mut cholesky) => {
+                cholesky.carry_cpu_path(&self.cholesky);
                 let mut values = vec![0.0; pattern.row_idx.len()];
                 let mut fresh = vec![true; values.len()];
                 for (&q, &v) in pos.iter().zip(&self.values) {

@@ -2,6 +2,14 @@
 //! tree, supernodes) once per pattern, numeric Cholesky each Newton iteration into
 //! preallocated storage. LLᵀ is tried first (its failure is a free positive-definiteness
 //! test); an indefinite tangent falls back to LDLᵀ on the same symbolic structure.
+//!
+//! With two or more threads and a large enough system with a small, balanced separator, the
+//! numeric LLᵀ is split in two halves factorized on two cores at once
+//! (`split_cholesky.rs`, one level of nested dissection with a dense Schur complement); an
+//! LLᵀ failure there falls back to the monolithic LLᵀ/LDLᵀ. The monolithic symbolic analysis
+//! is always made (its factor's work decides whether the split pays); its storage is
+//! allocated on first use. faer's own parallel numeric factorization is not used: on the 2-core
+//! machine it was slower than the sequential one at every size (see `factor_threads`).
 
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::cholesky::ldlt::factor::LdltRegularization;
@@ -13,7 +21,25 @@ use faer::sparse::linalg::cholesky::{
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat, SymbolicSparseColMatRef};
 use faer::{Conj, MatMut, Par, Side};
 
+use super::separator::{dissect, SEP};
+pub use super::split_cholesky::thread_cpu_seconds;
+use super::split_cholesky::SplitCholesky;
 use crate::assembly::Pattern;
+
+/// Smallest system for which the split factorization is used (below it the monolithic
+/// factorization takes under about a millisecond and the halves' join does not pay).
+pub const SPLIT_MIN_EQUATIONS: usize = 4000;
+/// Largest separator, as a fraction of the equations, for which the split is used.
+const SPLIT_MAX_SEPARATOR: f64 = 0.05;
+/// Smallest half, as a fraction of the equations outside the separator.
+const SPLIT_MIN_HALF: f64 = 0.35;
+/// Largest |Σ|³ (the order of the split's dense work: the separator's blocks of the two
+/// halves, their products S_k and the factorization of S, each about |Σ|³/3 multiply-adds)
+/// against the monolithic factor's Σ c_j². Measured: ≈ 0.05 on 5-DOF grids from 32² to
+/// 100², where the split's critical path is 1.9–2.1× shorter; ≈ 1.0 on the three-ply
+/// `nbc_hood.ron` and `nbc_sleeve_on_arm.ron` tangents, whose plies AMD orders almost
+/// independently while a level-set separator cuts through all three (1.0–1.15×).
+const SPLIT_MAX_DENSE_WORK: f64 = 0.25;
 
 /// Which factorization the last numeric step produced.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -42,30 +68,49 @@ impl std::fmt::Display for LinearError {
     }
 }
 
-/// A reusable sparse Cholesky solver for one pattern.
-pub struct SparseCholesky {
-    pattern: SymbolicSparseColMat<usize>,
+/// The monolithic factorization: AMD symbolic analysis and the factor's storage.
+struct Monolithic {
     symbolic: SymbolicCholesky<usize>,
     l_values: Vec<f64>,
     buffer: MemBuffer,
-    kind: FactorKind,
-    par: Par,
-    /// Matrix values of the factorization held in `l_values`, if it succeeded.
-    factored: Option<Vec<f64>>,
 }
 
-impl SparseCholesky {
-    /// Symbolic analysis of the upper-triangular pattern; `threads` for the numeric phase.
-    pub fn analyse(pattern: &Pattern, threads: usize) -> Result<Self, LinearError> {
-        let n = pattern.n;
-        let sym = SymbolicSparseColMat::new_checked(n, n, pattern.col_ptr.clone(), None, pattern.row_idx.clone());
-        let symbolic = factorize_symbolic_cholesky(
-            sym.as_ref(),
-            Side::Upper,
-            SymmetricOrdering::Amd,
-            CholeskySymbolicParams::default(),
-        )
-        .map_err(|e| LinearError::Symbolic(format!("{e:?} (analysing {n} equations with {} stored entries)", pattern.row_idx.len())))?;
+/// AMD ordering and symbolic analysis of the monolithic factorization.
+fn monolithic_symbolic(sym: SymbolicSparseColMatRef<'_, usize>) -> Result<SymbolicCholesky<usize>, LinearError> {
+    let n = sym.nrows();
+    factorize_symbolic_cholesky(sym, Side::Upper, SymmetricOrdering::Amd, CholeskySymbolicParams::default())
+        .map_err(|e| LinearError::Symbolic(format!("{e:?} (analysing {n} equations with {} stored entries)", sym.row_idx().len())))
+}
+
+/// Σ c_j² over the columns of the factor (c_j the column's entries): proportional to the
+/// numeric factorization's floating-point work (George & Liu 1981, §2.2: Σ c_j(c_j + 3)/2
+/// multiplications for LLᵀ).
+fn factor_work(symbolic: &SymbolicCholesky<usize>) -> f64 {
+    let mut work = 0.0;
+    match symbolic.raw() {
+        SymbolicCholeskyRaw::Simplicial(sym) => {
+            let cp = sym.col_ptr();
+            for j in 0..sym.ncols() {
+                work += ((cp[j + 1] - cp[j]) as f64).powi(2);
+            }
+        }
+        SymbolicCholeskyRaw::Supernodal(sym) => {
+            for k in 0..sym.n_supernodes() {
+                let w = sym.supernode_end()[k] - sym.supernode_begin()[k];
+                let below = sym.supernode(k).pattern().len();
+                for t in 0..w {
+                    work += ((w - t + below) as f64).powi(2);
+                }
+            }
+        }
+    }
+    work
+}
+
+impl Monolithic {
+    /// Allocates the factor's storage and workspace for the analysed `symbolic`.
+    fn new(symbolic: SymbolicCholesky<usize>) -> Result<Self, LinearError> {
+        let n = symbolic.nrows();
         // The factor's size is known now, before its storage is allocated: check it against
         // the memory budget and allocate fallibly (an abort is never the answer).
         let len = symbolic.len_val();
@@ -75,14 +120,101 @@ impl SparseCholesky {
             .try_reserve_exact(len)
             .map_err(|_| LinearError::Symbolic(format!("out of memory for the Cholesky factor of {n} equations ({len} entries)")))?;
         l_values.resize(len, 0.0);
-        let par = if threads > 1 { Par::rayon(threads) } else { Par::Seq };
+        let par = Par::Seq;
         let req = StackReq::any_of(&[
             symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default()),
             symbolic.factorize_numeric_ldlt_scratch::<f64>(par, Default::default()),
             symbolic.solve_in_place_scratch::<f64>(1, par),
         ]);
         let buffer = MemBuffer::try_new(req).map_err(|_| LinearError::Symbolic("out of memory for workspace".into()))?;
-        Ok(Self { pattern: sym, symbolic, l_values, buffer, kind: FactorKind::Llt, par, factored: None })
+        Ok(Self { symbolic, l_values, buffer })
+    }
+}
+
+/// A reusable sparse Cholesky solver for one pattern.
+pub struct SparseCholesky {
+    pattern: SymbolicSparseColMat<usize>,
+    /// The two-core split factorization, if the pattern has a good separator.
+    split: Option<SplitCholesky>,
+    /// The monolithic factorization: allocated at once without a split, on first use
+    /// otherwise (from `mono_symbolic`).
+    mono: Option<Monolithic>,
+    mono_symbolic: Option<SymbolicCholesky<usize>>,
+    /// The last successful numeric factorization is the split one.
+    split_active: bool,
+    kind: FactorKind,
+    /// Matrix values of the factorization held, if it succeeded.
+    factored: Option<Vec<f64>>,
+    /// CPU seconds on the numeric factorizations' critical path so far: the calling
+    /// thread's for the monolithic one, max(halves) + Schur for the split one.
+    cpu_path: f64,
+}
+
+impl SparseCholesky {
+    /// Symbolic analysis of the upper-triangular pattern; `threads` for the numeric phase
+    /// (two or more: the split factorization where it applies).
+    pub fn analyse(pattern: &Pattern, threads: usize) -> Result<Self, LinearError> {
+        let n = pattern.n;
+        let sym = SymbolicSparseColMat::new_checked(n, n, pattern.col_ptr.clone(), None, pattern.row_idx.clone());
+        let symbolic = monolithic_symbolic(sym.as_ref())?;
+        let split = if threads >= 2 && n >= SPLIT_MIN_EQUATIONS { Self::analyse_split(pattern, factor_work(&symbolic))? } else { None };
+        let (mono, mono_symbolic) = if split.is_none() { (Some(Monolithic::new(symbolic)?), None) } else { (None, Some(symbolic)) };
+        Ok(Self { pattern: sym, split, mono, mono_symbolic, split_active: false, kind: FactorKind::Llt, factored: None, cpu_path: 0.0 })
+    }
+
+    /// The split analysis if the pattern's separator is small (≤ 5 % of the equations),
+    /// balanced (each half ≥ 35 % of the rest) and its dense work |Σ|³ small against the
+    /// monolithic factorization's `mono_work` ([`factor_work`]); None otherwise.
+    fn analyse_split(pattern: &Pattern, mono_work: f64) -> Result<Option<SplitCholesky>, LinearError> {
+        let n = pattern.n;
+        let part = dissect(n, &pattern.col_ptr, &pattern.row_idx);
+        let mut counts = [0usize; 3];
+        part.iter().for_each(|&p| counts[p as usize] += 1);
+        let rest = (n - counts[SEP as usize]) as f64;
+        let small = counts[SEP as usize] as f64 <= SPLIT_MAX_SEPARATOR * n as f64;
+        let balanced = counts[0].min(counts[1]) as f64 >= SPLIT_MIN_HALF * rest;
+        let dense = (counts[SEP as usize] as f64).powi(3);
+        if !(small && balanced && dense <= SPLIT_MAX_DENSE_WORK * mono_work) {
+            return Ok(None);
+        }
+        let split = SplitCholesky::analyse(n, &pattern.col_ptr, &pattern.row_idx, &part).map_err(|e| LinearError::Symbolic(format!("{e} (splitting {n} equations)")))?;
+        crate::budget::check_alloc(&format!("the split Cholesky factor of {n} equations"), split.factor_nnz() as u64, 8).map_err(LinearError::Symbolic)?;
+        Ok(Some(split))
+    }
+
+    /// Size of the split factorization's separator, if the split is in use.
+    pub fn separator_len(&self) -> Option<usize> {
+        self.split.as_ref().map(|s| s.separator_len())
+    }
+
+    /// CPU seconds of the last split factorization: half 1, half 2 (each on its core), and
+    /// the dense Schur complement's assembly and LLᵀ; None without the split.
+    pub fn split_profile(&self) -> Option<[f64; 3]> {
+        self.split.as_ref().map(|s| s.profile)
+    }
+
+    /// CPU seconds on the critical path of the numeric factorizations so far (what the
+    /// factorizations take on free cores; a shared machine inflates their wall time).
+    pub fn cpu_path_seconds(&self) -> f64 {
+        self.cpu_path
+    }
+
+    /// Takes over the critical-path CPU time of the factorizations of `old` (a solver for
+    /// the pattern this one's grew from).
+    pub fn carry_cpu_path(&mut self, old: &SparseCholesky) {
+        self.cpu_path += old.cpu_path;
+    }
+
+    /// The monolithic factorization, analysed on first use.
+    fn mono(&mut self) -> Result<&mut Monolithic, LinearError> {
+        if self.mono.is_none() {
+            let symbolic = match self.mono_symbolic.take() {
+                Some(s) => s,
+                None => monolithic_symbolic(self.pattern.as_ref())?,
+            };
+            self.mono = Some(Monolithic::new(symbolic)?);
+        }
+        self.mono.as_mut().ok_or(LinearError::Singular)
     }
 
     /// Which factorization the last successful numeric step produced.
@@ -90,9 +222,13 @@ impl SparseCholesky {
         self.kind
     }
 
-    /// Number of stored values of the factor.
+    /// Number of stored values of the factor (of the split factorization if in use).
     pub fn factor_nnz(&self) -> usize {
-        self.l_values.len()
+        match (&self.split, &self.mono) {
+            (Some(s), _) if self.split_active || self.mono.is_none() => s.factor_nnz(),
+            (_, Some(m)) => m.l_values.len(),
+            _ => 0,
+        }
     }
 
     fn matrix<'a>(&'a self, values: &'a [f64]) -> SparseColMatRef<'a, usize, f64> {
@@ -124,17 +260,8 @@ impl SparseCholesky {
             return self.kind == FactorKind::Llt;
         }
         let mut factored = self.factored.take().unwrap_or_default();
-        let a = SparseColMatRef::new(self.pattern.as_ref(), values);
-        let llt = self.symbolic.factorize_numeric_llt::<f64>(
-            &mut self.l_values,
-            a,
-            Side::Upper,
-            LltRegularization::default(),
-            self.par,
-            MemStack::new(&mut self.buffer),
-            Default::default(),
-        );
-        if llt.is_err() {
+        let ok = self.factorize_llt(values);
+        if !ok {
             // The partial factor is garbage: nothing is cached.
             return false;
         }
@@ -145,46 +272,66 @@ impl SparseCholesky {
         true
     }
 
+    /// LLᵀ by the split factorization if there is one, else (or if it met a non-positive
+    /// pivot) by the monolithic one; false if the matrix is not positive definite.
+    fn factorize_llt(&mut self, values: &[f64]) -> bool {
+        let t = thread_cpu_seconds();
+        if let Some(split) = &mut self.split {
+            // A failure of the split's LLᵀ means A is not positive definite (each bordered
+            // half is a principal submatrix's congruent, S its Schur complement); the
+            // monolithic LDLᵀ below gives the inertia.
+            let ok = split.factorize(values);
+            let [h1, h2, s] = split.profile;
+            self.cpu_path += h1.max(h2) + s + (thread_cpu_seconds() - t);
+            self.split_active = ok;
+            return ok;
+        }
+        self.split_active = false;
+        let pattern = &self.pattern;
+        let Some(mono) = self.mono.as_mut() else { return false };
+        let a = SparseColMatRef::new(pattern.as_ref(), values);
+        let ok = mono
+            .symbolic
+            .factorize_numeric_llt::<f64>(&mut mono.l_values, a, Side::Upper, LltRegularization::default(), Par::Seq, MemStack::new(&mut mono.buffer), Default::default())
+            .is_ok();
+        self.cpu_path += thread_cpu_seconds() - t;
+        ok
+    }
+
     fn factorize_numeric(&mut self, values: &[f64]) -> Result<FactorKind, LinearError> {
-        let par = self.par;
-        let a = SparseColMatRef::new(self.pattern.as_ref(), values);
-        let llt = self.symbolic.factorize_numeric_llt::<f64>(
-            &mut self.l_values,
-            a,
-            Side::Upper,
-            LltRegularization::default(),
-            par,
-            MemStack::new(&mut self.buffer),
-            Default::default(),
-        );
-        if llt.is_ok() {
+        if self.factorize_llt(values) {
             self.kind = FactorKind::Llt;
             return Ok(FactorKind::Llt);
         }
-        let a = SparseColMatRef::new(self.pattern.as_ref(), values);
-        self.symbolic
-            .factorize_numeric_ldlt::<f64>(
-                &mut self.l_values,
-                a,
-                Side::Upper,
-                LdltRegularization::default(),
-                par,
-                MemStack::new(&mut self.buffer),
-                Default::default(),
-            )
+        let t = thread_cpu_seconds();
+        self.mono()?;
+        let pattern = &self.pattern;
+        let mono = self.mono.as_mut().ok_or(LinearError::Singular)?;
+        let a = SparseColMatRef::new(pattern.as_ref(), values);
+        mono.symbolic
+            .factorize_numeric_ldlt::<f64>(&mut mono.l_values, a, Side::Upper, LdltRegularization::default(), Par::Seq, MemStack::new(&mut mono.buffer), Default::default())
             .map_err(|_| LinearError::Singular)?;
+        self.cpu_path += thread_cpu_seconds() - t;
+        self.split_active = false;
         self.kind = FactorKind::Ldlt;
         Ok(FactorKind::Ldlt)
     }
 
     /// Solves A x = rhs in place with the last factorization.
     pub fn solve(&mut self, rhs: &mut [f64]) {
+        if self.split_active {
+            if let Some(split) = &mut self.split {
+                split.solve(rhs);
+            }
+            return;
+        }
+        let Some(mono) = self.mono.as_mut() else { return };
         let n = rhs.len();
         let mat = MatMut::from_column_major_slice_mut(rhs, n, 1);
-        let stack = MemStack::new(&mut self.buffer);
+        let stack = MemStack::new(&mut mono.buffer);
         match self.kind {
-            FactorKind::Llt => LltRef::new(&self.symbolic, &self.l_values).solve_in_place_with_conj(Conj::No, mat, self.par, stack),
-            FactorKind::Ldlt => LdltRef::new(&self.symbolic, &self.l_values).solve_in_place_with_conj(Conj::No, mat, self.par, stack),
+            FactorKind::Llt => LltRef::new(&mono.symbolic, &mono.l_values).solve_in_place_with_conj(Conj::No, mat, Par::Seq, stack),
+            FactorKind::Ldlt => LdltRef::new(&mono.symbolic, &mono.l_values).solve_in_place_with_conj(Conj::No, mat, Par::Seq, stack),
         }
     }
 
@@ -204,13 +351,17 @@ impl SparseCholesky {
     /// The pivots of the last factorization: D of L D Lᵀ, or the squared diagonal of L
     /// after LLᵀ (in elimination order).
     pub fn pivots(&self) -> Vec<f64> {
+        if self.split_active {
+            return self.split.as_ref().map(|s| s.pivots()).unwrap_or_default();
+        }
         let square = self.kind == FactorKind::Llt;
-        let mut out = Vec::with_capacity(self.symbolic.nrows());
-        match self.symbolic.raw() {
+        let Some(mono) = self.mono.as_ref() else { return Vec::new() };
+        let mut out = Vec::with_capacity(mono.symbolic.nrows());
+        match mono.symbolic.raw() {
             SymbolicCholeskyRaw::Simplicial(sym) => {
                 // Each column of the simplicial factor stores its diagonal first.
                 let cp = sym.col_ptr();
-                let l = simplicial::SimplicialLdltRef::<'_, usize, f64>::new(sym, &self.l_values);
+                let l = simplicial::SimplicialLdltRef::<'_, usize, f64>::new(sym, &mono.l_values);
                 let v = l.values();
                 for j in 0..sym.ncols() {
                     out.push(v[cp[j]]);
@@ -218,7 +369,7 @@ impl SparseCholesky {
             }
             SymbolicCholeskyRaw::Supernodal(sym) => {
                 // The top block of each supernode holds the diagonal block of the factor.
-                let l = supernodal::SupernodalLdltRef::<'_, usize, f64>::new(sym, &self.l_values);
+                let l = supernodal::SupernodalLdltRef::<'_, usize, f64>::new(sym, &mono.l_values);
                 for s in 0..sym.n_supernodes() {
                     let m = l.supernode(s).val();
                     for j in 0..m.ncols() {
@@ -319,7 +470,7 @@ mod tests {
         for m in [6, 40, 150] {
             let (p, v) = laplacian(m);
             let mut chol = SparseCholesky::analyse(&p, 1).unwrap();
-            let supernodal = matches!(chol.symbolic.raw(), SymbolicCholeskyRaw::Supernodal(_));
+            let supernodal = matches!(chol.mono.as_ref().unwrap().symbolic.raw(), SymbolicCholeskyRaw::Supernodal(_));
             if m != 40 {
                 assert_eq!(supernodal, m > 40, "m={m}: expected the other factor storage");
             }

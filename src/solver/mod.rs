@@ -17,6 +17,8 @@ pub mod nodal;
 mod report;
 mod reuse;
 mod saddle;
+mod separator;
+mod split_cholesky;
 mod time_step;
 
 pub use chord::ChordSettings;
@@ -45,11 +47,20 @@ pub struct SolverSettings {
     pub max_cutbacks: usize,
     /// Worker threads for assembly (0 = all cores).
     pub threads: usize,
-    /// Threads of the sparse Cholesky factorization (0 = all cores). Default 1: on the
-    /// 2-core machine this project is measured on, faer's parallel numeric factorization on
-    /// two threads was slower than the sequential one at every size tried — 5,445 equations
-    /// (6.8 against 12.9 ms), 12,750 (20.6 against 36.1 ms), 50,500 (122 against 182 ms) and
-    /// 199,200 (818 against 1,307 ms, 44 M factor entries).
+    /// Threads of the sparse Cholesky factorization (0, the default, = all cores; 1 = the
+    /// monolithic factorization). With two or more, a system of at least 4,000 equations
+    /// whose graph has a small balanced separator, with dense work small against the
+    /// monolithic factorization's (`linear.rs`), is factorized in two halves on two cores
+    /// at once (`linear.rs`, `split_cholesky.rs`: one level of nested dissection, a dense
+    /// Schur complement); results then differ from one thread's in round-off, and are the
+    /// same for a given thread count. Measured on the 2-core machine this project uses, 5-DOF
+    /// quad grids (`examples/factor_speed.rs`, CPU time of each half on its core against the
+    /// monolithic factorization on one): 2.0× at 5,280 and 20,800 equations, 1.9× at
+    /// 50,500, 2.0× for two disconnected 64² grids. faer's own parallel numeric
+    /// factorization (`Par::rayon`) is not used: on two threads it was slower than the
+    /// sequential one at every size tried — 5,445 equations (6.8 against 12.9 ms), 12,750
+    /// (20.6 against 36.1 ms), 50,500 (122 against 182 ms) and 199,200 (818 against
+    /// 1,307 ms, 44 M factor entries).
     pub factor_threads: usize,
     /// Chord (modified) Newton in static load-controlled increments: keep a factorization
     /// while the residual contracts fast (`chord.rs`); None (the default) is full Newton.
@@ -64,7 +75,7 @@ pub struct SolverSettings {
 
 impl Default for SolverSettings {
     fn default() -> Self {
-        Self { max_iterations: 30, residual_tol: 1e-7, energy_tol: 1e-14, line_search: true, max_cutbacks: 10, threads: 0, factor_threads: 1, chord: None, mixed_stress: true }
+        Self { max_iterations: 30, residual_tol: 1e-7, energy_tol: 1e-14, line_search: true, max_cutbacks: 10, threads: 0, factor_threads: 0, chord: None, mixed_stress: true }
     }
 }
 

@@ -72,6 +72,11 @@ pub struct Timings {
     pub assembly: f64,
     /// Numeric factorization.
     pub factorization: f64,
+    /// CPU seconds on the numeric factorizations' critical path (the calling thread's for
+    /// the monolithic factorization, the slower half's plus the Schur complement's for the
+    /// split one): what `factorization` would be on free cores.
+    #[serde(default)]
+    pub factorization_cpu_path: f64,
     /// Triangular solves.
     pub solve: f64,
     /// Symbolic analysis (once).
@@ -175,6 +180,12 @@ const MAX_FIRST_ROTATION: f64 = 1.0;
 const SETTLED_ITERATIONS: usize = 3;
 
 impl<'m> Solver<'m> {
+    /// CPU seconds on the critical path of the numeric factorizations so far
+    /// ([`Timings::factorization_cpu_path`]).
+    pub fn factorization_cpu_path(&self) -> f64 {
+        self.cholesky.cpu_path_seconds()
+    }
+
     /// Builds the pattern and the symbolic factorization of `model`.
     pub fn new(model: &'m Model, settings: SolverSettings) -> Result<Self, String> {
         let threads = if settings.factor_threads == 0 { rayon::current_num_threads() } else { settings.factor_threads };
