@@ -27,57 +27,10 @@ use std::time::Instant;
 use nalgebra::Vector3;
 use plyshell::assembly::psd::{project_psd_traced, Projection};
 use plyshell::assembly::Assembler;
+use plyshell::cpu_time::{process_seconds, thread_seconds};
 use plyshell::element::{DirectorFrame, ElementGeometry, Section, SectionRule, ShearTreatment, ShellElement};
 use plyshell::material::{twist_default, Fabric, FabricProperties, LaminaPly, Laminate, NeoHookean, ShellMaterial, StVenantKirchhoff};
 use rayon::prelude::*;
-
-/// CPU time of the calling thread in seconds (Linux `CLOCK_THREAD_CPUTIME_ID`, exact to the
-/// nanosecond and blind to time the thread spends preempted, so single-thread kernel timings
-/// hold up on a shared machine); wall time elsewhere.
-#[cfg(target_os = "linux")]
-fn thread_seconds() -> f64 {
-    cpu_seconds(3)
-}
-
-/// CPU time of the whole process in seconds, all threads (Linux `CLOCK_PROCESS_CPUTIME_ID`):
-/// the work of a pool-run assembly, blind to preemption; wall time elsewhere.
-#[cfg(target_os = "linux")]
-fn process_seconds() -> f64 {
-    cpu_seconds(2)
-}
-
-#[cfg(not(target_os = "linux"))]
-fn process_seconds() -> f64 {
-    wall_seconds()
-}
-
-/// `clock_gettime` of the CPU-time clock `clock` in seconds (wall time if it fails).
-#[cfg(target_os = "linux")]
-fn cpu_seconds(clock: i32) -> f64 {
-    #[repr(C)]
-    struct Timespec {
-        tv_sec: i64,
-        tv_nsec: i64,
-    }
-    unsafe extern "C" {
-        fn clock_gettime(clock: i32, tp: *mut Timespec) -> i32;
-    }
-    let mut t = Timespec { tv_sec: 0, tv_nsec: 0 };
-    // SAFETY: clock_gettime writes one timespec into the valid, exclusively borrowed `t`.
-    let rc = unsafe { clock_gettime(clock, &mut t) };
-    if rc == 0 { t.tv_sec as f64 + 1e-9 * t.tv_nsec as f64 } else { wall_seconds() }
-}
-
-#[cfg(not(target_os = "linux"))]
-fn thread_seconds() -> f64 {
-    wall_seconds()
-}
-
-fn wall_seconds() -> f64 {
-    use std::sync::OnceLock;
-    static START: OnceLock<Instant> = OnceLock::new();
-    START.get_or_init(Instant::now).elapsed().as_secs_f64()
-}
 
 fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);

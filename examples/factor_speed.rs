@@ -20,83 +20,10 @@
 use std::time::Instant;
 
 use plyshell::assembly::Pattern;
-use plyshell::solver::linear::{thread_cpu_seconds, SparseCholesky};
+use plyshell::cpu_time::{process_seconds, thread_seconds};
+use plyshell::solver::linear::SparseCholesky;
 
-/// Process CPU seconds (all threads; Linux `CLOCK_PROCESS_CPUTIME_ID`), wall time elsewhere.
-fn process_seconds() -> f64 {
-    #[cfg(target_os = "linux")]
-    {
-        #[repr(C)]
-        struct Timespec {
-            tv_sec: i64,
-            tv_nsec: i64,
-        }
-        unsafe extern "C" {
-            fn clock_gettime(clock: i32, tp: *mut Timespec) -> i32;
-        }
-        let mut t = Timespec { tv_sec: 0, tv_nsec: 0 };
-        // SAFETY: clock_gettime writes one timespec into the valid, exclusively borrowed `t`.
-        if unsafe { clock_gettime(2, &mut t) } == 0 {
-            return t.tv_sec as f64 + 1e-9 * t.tv_nsec as f64;
-        }
-    }
-    wall()
-}
 
-fn wall() -> f64 {
-    use std::sync::OnceLock;
-    static START: OnceLock<Instant> = OnceLock::new();
-    START.get_or_init(Instant::now).elapsed().as_secs_f64()
-}
-
-/// Upper-triangular pattern and values of `copies` disjoint m×m-element grids of 5-DOF
-/// nodes (the nodes of column 0 clamped).
-fn grid5(m: usize, copies: usize) -> (Pattern, Vec<f64>) {
-    let per = m * (m + 1);
-    let nn = per * copies;
-    let mut adj: Vec<Vec<usize>> = vec![Vec::new(); nn];
-    for cpy in 0..copies {
-        let eqn = |i: usize, j: usize| if i == 0 { usize::MAX } else { cpy * per + j * m + (i - 1) };
-        for j in 0..m {
-            for i in 0..m {
-                let q = [eqn(i, j), eqn(i + 1, j), eqn(i + 1, j + 1), eqn(i, j + 1)];
-                for &a in &q {
-                    for &b in &q {
-                        if a != usize::MAX && b != usize::MAX {
-                            adj[a].push(b);
-                        }
-                    }
-                }
-            }
-        }
-    }
-    adj.iter_mut().for_each(|a| {
-        a.sort_unstable();
-        a.dedup();
-    });
-    let k5 = |k: usize, l: usize| {
-        let s = [1e3, 1e3, 1e3, 1.0, 1.0];
-        if k == l { 2.0 * s[k] } else { 0.3 * f64::sqrt(s[k] * s[l]) }
-    };
-    let (mut col_ptr, mut row_idx, mut values) = (vec![0], Vec::new(), Vec::new());
-    for a in 0..nn {
-        for k in 0..5 {
-            let col = a * 5 + k;
-            for &b in &adj[a] {
-                for l in 0..5 {
-                    let row = b * 5 + l;
-                    if row <= col {
-                        row_idx.push(row);
-                        let w = if a == b { (adj[a].len() - 1) as f64 + 0.5 } else { -1.0 };
-                        values.push(w * k5(l, k) + if row == col { 1e-4 } else { 0.0 });
-                    }
-                }
-            }
-            col_ptr.push(row_idx.len());
-        }
-    }
-    (Pattern { n: nn * 5, col_ptr, row_idx }, values)
-}
 
 /// The scene's initial tangent pattern with diagonally dominant values (each diagonal entry
 /// one more than its row's off-diagonal magnitudes).
@@ -153,10 +80,10 @@ fn run(p: &Pattern, v: &[f64], threads: usize, repeats: usize) -> Result<Run, St
     for r in 0..repeats {
         // A fresh matrix each time (the factorization of an unchanged one is kept).
         let vr: Vec<f64> = v.iter().map(|a| a * (1.0 + 1e-12 * r as f64)).collect();
-        let (t, c) = (Instant::now(), thread_cpu_seconds());
+        let (t, c) = (Instant::now(), thread_seconds());
         chol.factorize(&vr).map_err(|e| e.to_string())?;
         numeric.push(t.elapsed().as_secs_f64());
-        numeric_cpu.push(thread_cpu_seconds() - c);
+        numeric_cpu.push(thread_seconds() - c);
         halves.push(chol.split_profile());
         x.copy_from_slice(&b);
         let t = Instant::now();
@@ -195,7 +122,7 @@ fn main() -> Result<(), String> {
     println!("grid      equations  factor 1t   factor 2t   |Σ|  symbolic 1t  2t  | numeric 1t (CPU  wall) | 2t halves (CPU)  Schur  path   wall | speed-up path  wall | solve 1t   2t | residual 1t / 2t");
     let mut scenes = scenes.into_iter();
     for (m, copies) in sizes {
-        let (p, v) = if copies == 0 { scene_pattern(&scenes.next().unwrap_or_default())? } else { grid5(m, copies) };
+        let (p, v) = if copies == 0 { scene_pattern(&scenes.next().unwrap_or_default())? } else { plyshell::solver::split_cholesky::grid_plies(m, copies, 0, 1e-4) };
         let mono = run(&p, &v, 1, repeats)?;
         let split = run(&p, &v, 2, repeats)?;
         let [h1, h2, s] = split.profile.unwrap_or([f64::NAN; 3]);

@@ -40,6 +40,7 @@ pub mod contact;
 pub mod garment;
 pub mod pattern;
 pub mod budget;
+pub mod cpu_time;
 pub mod sizing;
 pub mod fuzz;
 pub mod mannequin;

@@ -6,6 +6,19 @@
 use plyshell::garment::PlyModel;
 use plyshell::study::{run_study, StudyOptions};
 
+/// A 20 cm × 2 cm cotton strip clamped at one end, sagging under its weight (a Peirce
+/// cantilever), static: a scene of one sized part.
+const STRIP: &str = r#"Scene(
+    name: "strip",
+    materials: {"fabric": Fabric((preset: Some("cotton_broadcloth")))},
+    parts: [(name: "strip", mesh: SizedRectangle(lx: 0.2, ly: 0.02, element_size: 0.01), material: "fabric", thickness: 0.3e-3)],
+    node_sets: {"root": Edge(part: "strip", edge: "xmin")},
+    boundary: [Clamp(set: "root")],
+    loads: {"weight": SelfWeight(part: "strip", g: (0.0, 0.0, -9.81))},
+    steps: [(name: "sag", increments: 4, scale: {"weight": 1.0})],
+    output: (vtu: false),
+)"#;
+
 #[test]
 fn study_of_a_two_ply_flap_writes_a_table_with_a_zero_error_reference() {
     let out = std::env::temp_dir().join(format!("plyshell_study_{}", std::process::id()));
@@ -44,16 +57,7 @@ fn study_of_a_two_ply_flap_writes_a_table_with_a_zero_error_reference() {
 /// clamped at one end, sagging under its weight (a Peirce cantilever), static.
 #[test]
 fn study_of_a_sized_part_varies_its_element_size() {
-    let text = r#"Scene(
-    name: "strip",
-    materials: {"fabric": Fabric((preset: Some("cotton_broadcloth")))},
-    parts: [(name: "strip", mesh: SizedRectangle(lx: 0.2, ly: 0.02, element_size: 0.01), material: "fabric", thickness: 0.3e-3)],
-    node_sets: {"root": Edge(part: "strip", edge: "xmin")},
-    boundary: [Clamp(set: "root")],
-    loads: {"weight": SelfWeight(part: "strip", g: (0.0, 0.0, -9.81))},
-    steps: [(name: "sag", increments: 4, scale: {"weight": 1.0})],
-    output: (vtu: false),
-)"#;
+    let text = STRIP;
     let dir = std::env::temp_dir().join(format!("plyshell_study_part_{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("temp dir");
     let path = dir.join("strip.ron");
@@ -87,16 +91,7 @@ fn study_of_a_sized_part_varies_its_element_size() {
 /// against 1000), and its Newton count is both passes'.
 #[test]
 fn study_refines_a_coarse_level_a_posteriori() {
-    let text = r#"Scene(
-    name: "strip",
-    materials: {"fabric": Fabric((preset: Some("cotton_broadcloth")))},
-    parts: [(name: "strip", mesh: SizedRectangle(lx: 0.2, ly: 0.02, element_size: 0.01), material: "fabric", thickness: 0.3e-3)],
-    node_sets: {"root": Edge(part: "strip", edge: "xmin")},
-    boundary: [Clamp(set: "root")],
-    loads: {"weight": SelfWeight(part: "strip", g: (0.0, 0.0, -9.81))},
-    steps: [(name: "sag", increments: 4, scale: {"weight": 1.0})],
-    output: (vtu: false),
-)"#;
+    let text = STRIP;
     let dir = std::env::temp_dir().join(format!("plyshell_study_refine_{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("temp dir");
     let path = dir.join("strip.ron");

@@ -22,7 +22,6 @@ use faer::sparse::{SparseColMatRef, SymbolicSparseColMat, SymbolicSparseColMatRe
 use faer::{Conj, MatMut, Par, Side};
 
 use super::separator::{dissect, SEP};
-pub use super::split_cholesky::thread_cpu_seconds;
 use super::split_cholesky::SplitCholesky;
 use crate::assembly::Pattern;
 
@@ -275,14 +274,14 @@ impl SparseCholesky {
     /// LLᵀ by the split factorization if there is one, else (or if it met a non-positive
     /// pivot) by the monolithic one; false if the matrix is not positive definite.
     fn factorize_llt(&mut self, values: &[f64]) -> bool {
-        let t = thread_cpu_seconds();
+        let t = crate::cpu_time::thread_seconds();
         if let Some(split) = &mut self.split {
             // A failure of the split's LLᵀ means A is not positive definite (each bordered
             // half is a principal submatrix's congruent, S its Schur complement); the
             // monolithic LDLᵀ below gives the inertia.
             let ok = split.factorize(values);
             let [h1, h2, s] = split.profile;
-            self.cpu_path += h1.max(h2) + s + (thread_cpu_seconds() - t);
+            self.cpu_path += h1.max(h2) + s + (crate::cpu_time::thread_seconds() - t);
             self.split_active = ok;
             return ok;
         }
@@ -294,7 +293,7 @@ impl SparseCholesky {
             .symbolic
             .factorize_numeric_llt::<f64>(&mut mono.l_values, a, Side::Upper, LltRegularization::default(), Par::Seq, MemStack::new(&mut mono.buffer), Default::default())
             .is_ok();
-        self.cpu_path += thread_cpu_seconds() - t;
+        self.cpu_path += crate::cpu_time::thread_seconds() - t;
         ok
     }
 
@@ -303,7 +302,7 @@ impl SparseCholesky {
             self.kind = FactorKind::Llt;
             return Ok(FactorKind::Llt);
         }
-        let t = thread_cpu_seconds();
+        let t = crate::cpu_time::thread_seconds();
         self.mono()?;
         let pattern = &self.pattern;
         let mono = self.mono.as_mut().ok_or(LinearError::Singular)?;
@@ -311,7 +310,7 @@ impl SparseCholesky {
         mono.symbolic
             .factorize_numeric_ldlt::<f64>(&mut mono.l_values, a, Side::Upper, LdltRegularization::default(), Par::Seq, MemStack::new(&mut mono.buffer), Default::default())
             .map_err(|_| LinearError::Singular)?;
-        self.cpu_path += thread_cpu_seconds() - t;
+        self.cpu_path += crate::cpu_time::thread_seconds() - t;
         self.split_active = false;
         self.kind = FactorKind::Ldlt;
         Ok(FactorKind::Ldlt)

@@ -18,7 +18,7 @@ mod report;
 mod reuse;
 mod saddle;
 mod separator;
-mod split_cholesky;
+pub mod split_cholesky;
 mod time_step;
 
 pub use chord::ChordSettings;

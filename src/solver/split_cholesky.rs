@@ -16,6 +16,7 @@
 //! and (3) take one forward and one backward substitution with the half's factor (see
 //! `Half::first_pass`), so a solve costs what the monolithic one does, on two cores.
 
+use crate::assembly::Pattern;
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::cholesky::llt::factor::LltRegularization;
 use faer::linalg::matmul::triangular::BlockStructure;
@@ -60,7 +61,7 @@ pub(super) struct SplitCholesky {
     s: Mat<f64>,
     buffer: MemBuffer,
     work: Vec<f64>,
-    /// CPU seconds of the last numeric factorization (`thread_cpu_seconds`): half 1, half 2
+    /// CPU seconds of the last numeric factorization (`cpu_time::thread_seconds`): half 1, half 2
     /// (each on its core), and the dense Schur complement's assembly and factorization.
     pub(super) profile: [f64; 3],
 }
@@ -295,29 +296,6 @@ fn upper_of_symmetrized(m: usize, cp: &[usize], ri: &[usize]) -> (Vec<usize>, Ve
     (out_cp, out_ri)
 }
 
-/// CPU seconds of the calling thread (Linux `CLOCK_THREAD_CPUTIME_ID`: exact, and blind to
-/// time the thread waits preempted, so the profile holds up on a shared machine); 0 elsewhere.
-pub fn thread_cpu_seconds() -> f64 {
-    #[cfg(target_os = "linux")]
-    {
-        #[repr(C)]
-        struct Timespec {
-            tv_sec: i64,
-            tv_nsec: i64,
-        }
-        unsafe extern "C" {
-            fn clock_gettime(clock: i32, tp: *mut Timespec) -> i32;
-        }
-        const CLOCK_THREAD_CPUTIME_ID: i32 = 3;
-        let mut t = Timespec { tv_sec: 0, tv_nsec: 0 };
-        // SAFETY: clock_gettime writes one timespec into the valid, exclusively borrowed `t`.
-        if unsafe { clock_gettime(CLOCK_THREAD_CPUTIME_ID, &mut t) } == 0 {
-            return t.tv_sec as f64 + 1e-9 * t.tv_nsec as f64;
-        }
-    }
-    0.0
-}
-
 impl SplitCholesky {
     /// Symbolic analysis for the dissection `part` (HALF1/HALF2/SEP per equation) of the
     /// upper-triangular CSC pattern.
@@ -377,9 +355,9 @@ impl SplitCholesky {
     fn factorize_halves(&mut self, values: &[f64]) -> bool {
         let [h1, h2] = &mut self.halves;
         let timed = |h: &mut Half| {
-            let t = thread_cpu_seconds();
+            let t = crate::cpu_time::thread_seconds();
             let ok = h.factorize(values);
-            (ok, thread_cpu_seconds() - t)
+            (ok, crate::cpu_time::thread_seconds() - t)
         };
         let ((ok1, t1), (ok2, t2)) = rayon::join(|| timed(h1), || timed(h2));
         self.profile = [t1, t2, 0.0];
@@ -389,7 +367,7 @@ impl SplitCholesky {
     /// S = S₁ + S₂ − C and its dense LLᵀ; false if S is not positive definite.
     fn factorize_schur(&mut self, values: &[f64]) -> bool {
         let [h1, h2] = &self.halves;
-        let t = thread_cpu_seconds();
+        let t = crate::cpu_time::thread_seconds();
         let ns = self.sep.len();
         for j in 0..ns {
             for i in j..ns {
@@ -400,7 +378,7 @@ impl SplitCholesky {
             self.s[(i, j)] -= values[p];
         }
         let ok = faer::linalg::cholesky::llt::factor::cholesky_in_place(self.s.as_mut(), LltRegularization::default(), Par::Seq, MemStack::new(&mut self.buffer), Default::default()).is_ok();
-        self.profile[2] = thread_cpu_seconds() - t;
+        self.profile[2] = crate::cpu_time::thread_seconds() - t;
         ok
     }
 
@@ -451,6 +429,65 @@ impl SplitCholesky {
     }
 }
 
+/// A test and benchmark system (`examples/factor_speed.rs`): the upper-triangular pattern
+/// and values of `copies` m×m-element quad grids of 5-DOF nodes (the column of nodes i = 0
+/// clamped), the graph Laplacian ⊗ K₅ plus `shift`·I, K₅ coupling three stiff (1e3) and two
+/// soft (1) DOFs like a shell's translations and rotations (positive definite for shift > 0);
+/// the copies stacked as plies and tied node to node at every `tie_every`-th node (0: none,
+/// disjoint copies), like quilted plies.
+pub fn grid_plies(m: usize, copies: usize, tie_every: usize, shift: f64) -> (Pattern, Vec<f64>) {
+    let per = m * (m + 1);
+    let nn = per * copies;
+    let mut adj: Vec<Vec<usize>> = vec![Vec::new(); nn];
+    for a in (0..per).filter(|a| tie_every > 0 && a % tie_every == 0) {
+        for c in 1..copies {
+            adj[a + (c - 1) * per].push(a + c * per);
+            adj[a + c * per].push(a + (c - 1) * per);
+        }
+    }
+    for cpy in 0..copies {
+        let eqn = |i: usize, j: usize| if i == 0 { usize::MAX } else { cpy * per + j * m + (i - 1) };
+        for j in 0..m {
+            for i in 0..m {
+                let q = [eqn(i, j), eqn(i + 1, j), eqn(i + 1, j + 1), eqn(i, j + 1)];
+                for &a in &q {
+                    for &b in &q {
+                        if a != usize::MAX && b != usize::MAX {
+                            adj[a].push(b);
+                        }
+                    }
+                }
+            }
+        }
+    }
+    adj.iter_mut().for_each(|a| {
+        a.sort_unstable();
+        a.dedup();
+    });
+    let k5 = |k: usize, l: usize| {
+        let s = [1e3, 1e3, 1e3, 1.0, 1.0];
+        if k == l { 2.0 * s[k] } else { 0.3 * f64::sqrt(s[k] * s[l]) }
+    };
+    let (mut col_ptr, mut row_idx, mut values) = (vec![0], Vec::new(), Vec::new());
+    for a in 0..nn {
+        for k in 0..5 {
+            let col = a * 5 + k;
+            for &b in &adj[a] {
+                for l in 0..5 {
+                    let row = b * 5 + l;
+                    if row <= col {
+                        row_idx.push(row);
+                        let w = if a == b { (adj[a].len() - 1) as f64 + 0.5 } else { -1.0 };
+                        values.push(w * k5(l, k) + if row == col { shift } else { 0.0 });
+                    }
+                }
+            }
+            col_ptr.push(row_idx.len());
+        }
+    }
+    (Pattern { n: nn * 5, col_ptr, row_idx }, values)
+}
+
 #[cfg(test)]
 mod tests {
     use super::super::linear::{FactorKind, SparseCholesky};
@@ -461,62 +498,7 @@ mod tests {
     /// plus `shift`·I, K₅ coupling three stiff (1e3) and two soft (1) DOFs like a shell's
     /// translations and rotations; positive definite for shift > 0.
     fn grid5(m: usize, copies: usize, shift: f64) -> (Pattern, Vec<f64>) {
-        plies(m, copies, 0, shift)
-    }
-
-    /// [`grid5`] with the copies stacked as plies and tied node to node at every
-    /// `tie_every`-th node (0: no ties), like quilted plies.
-    fn plies(m: usize, copies: usize, tie_every: usize, shift: f64) -> (Pattern, Vec<f64>) {
-        let per = m * (m + 1);
-        let nn = per * copies;
-        let mut adj: Vec<Vec<usize>> = vec![Vec::new(); nn];
-        for a in (0..per).filter(|a| tie_every > 0 && a % tie_every == 0) {
-            for c in 1..copies {
-                adj[a + (c - 1) * per].push(a + c * per);
-                adj[a + c * per].push(a + (c - 1) * per);
-            }
-        }
-        for cpy in 0..copies {
-            let eqn = |i: usize, j: usize| if i == 0 { usize::MAX } else { cpy * per + j * m + (i - 1) };
-            for j in 0..m {
-                for i in 0..m {
-                    let q = [eqn(i, j), eqn(i + 1, j), eqn(i + 1, j + 1), eqn(i, j + 1)];
-                    for &a in &q {
-                        for &b in &q {
-                            if a != usize::MAX && b != usize::MAX {
-                                adj[a].push(b);
-                            }
-                        }
-                    }
-                }
-            }
-        }
-        adj.iter_mut().for_each(|a| {
-            a.sort_unstable();
-            a.dedup();
-        });
-        let k5 = |k: usize, l: usize| {
-            let s = [1e3, 1e3, 1e3, 1.0, 1.0];
-            if k == l { 2.0 * s[k] } else { 0.3 * f64::sqrt(s[k] * s[l]) }
-        };
-        let (mut col_ptr, mut row_idx, mut values) = (vec![0], Vec::new(), Vec::new());
-        for a in 0..nn {
-            for k in 0..5 {
-                let col = a * 5 + k;
-                for &b in &adj[a] {
-                    for l in 0..5 {
-                        let row = b * 5 + l;
-                        if row <= col {
-                            row_idx.push(row);
-                            let w = if a == b { (adj[a].len() - 1) as f64 + 0.5 } else { -1.0 };
-                            values.push(w * k5(l, k) + if row == col { shift } else { 0.0 });
-                        }
-                    }
-                }
-                col_ptr.push(row_idx.len());
-            }
-        }
-        (Pattern { n: nn * 5, col_ptr, row_idx }, values)
+        super::grid_plies(m, copies, 0, shift)
     }
 
     fn rhs(n: usize) -> Vec<f64> {
@@ -624,7 +606,7 @@ mod tests {
     /// monolithic factor's and the monolithic factorization is kept.
     #[test]
     fn quilted_plies_stay_monolithic() {
-        let (p, v) = plies(30, 3, 37, 1e-4);
+        let (p, v) = super::grid_plies(30, 3, 37, 1e-4);
         let mut chol = SparseCholesky::analyse(&p, 2).unwrap();
         assert!(chol.separator_len().is_none());
         assert_eq!(chol.factorize(&v).unwrap(), FactorKind::Llt);
