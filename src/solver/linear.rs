@@ -271,8 +271,9 @@ impl SparseCholesky {
         true
     }
 
-    /// LLᵀ by the split factorization if there is one, else (or if it met a non-positive
-    /// pivot) by the monolithic one; false if the matrix is not positive definite.
+    /// LLᵀ by the split factorization if there is one, else by the monolithic one; false if
+    /// the matrix is not positive definite (a split that meets a non-positive pivot is not
+    /// followed by a monolithic LLᵀ: the caller's LDLᵀ, if any, gives the inertia).
     fn factorize_llt(&mut self, values: &[f64]) -> bool {
         let t = crate::cpu_time::thread_seconds();
         if let Some(split) = &mut self.split {

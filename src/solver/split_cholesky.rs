@@ -260,18 +260,18 @@ impl Half {
     }
 
     /// Step (3): the backward solve of Lᵀ [x_A; x_Σ] = [y_A; L_Σᵀ x_Σ] gives
-    /// x_A = L_A⁻ᵀ (y_A − L_BAᵀ x_Σ) = A_k⁻¹ (b_k − B_k x_Σ), the half's unknowns.
-    fn second_pass(&mut self, x_sep: &[f64]) -> Vec<f64> {
+    /// x_A = L_A⁻ᵀ (y_A − L_BAᵀ x_Σ) = A_k⁻¹ (b_k − B_k x_Σ), the half's unknowns, left in
+    /// the first n_k entries of `work`.
+    fn second_pass(&mut self, x_sep: &[f64]) {
         let nk = self.nk();
         for j in 0..x_sep.len() {
             let col = self.l_sep.col(j);
             self.work[nk + j] = (j..x_sep.len()).map(|i| col[i] * x_sep[i]).sum();
         }
-        let SymbolicCholeskyRaw::Supernodal(sym) = self.symbolic.raw() else { return Vec::new() };
+        let SymbolicCholeskyRaw::Supernodal(sym) = self.symbolic.raw() else { return };
         let m = self.work.len();
         let rhs = MatMut::from_column_major_slice_mut(&mut self.work, m, 1);
         supernodal::SupernodalLltRef::<'_, usize, f64>::new(sym, &self.l_values).l_transpose_solve_with_conj(Conj::No, rhs, Par::Seq, MemStack::new(&mut self.buffer));
-        self.work[..nk].to_vec()
     }
 }
 
@@ -395,9 +395,9 @@ impl SplitCholesky {
         let xs = MatMut::from_column_major_slice_mut(&mut self.work, ns, 1);
         faer::linalg::cholesky::llt::solve::solve_in_place_with_conj(self.s.as_ref(), Conj::No, xs, Par::Seq, MemStack::new(&mut self.buffer));
         let xs = &self.work;
-        let (x1, x2) = rayon::join(|| h1.second_pass(xs), || h2.second_pass(xs));
-        for (h, x) in [(&*h1, x1), (&*h2, x2)] {
-            for (&i, v) in h.rows.iter().zip(x) {
+        rayon::join(|| h1.second_pass(xs), || h2.second_pass(xs));
+        for h in [&*h1, &*h2] {
+            for (&i, &v) in h.rows.iter().zip(&h.work[..h.nk()]) {
                 rhs[i] = v;
             }
         }
