@@ -17,8 +17,10 @@
 //! `cargo run --release --example assembly_speed -- SCENE.ron [REPEATS]`: seconds per
 //! global assembly (element evaluation + scatter) of a scene's model in a deformed state,
 //! with and without the tangent, on 1 and 2 threads (median of REPEATS; wall time and the
-//! process's CPU time, which a shared machine does not inflate). The Newton
-//! solver's own split is in `summary.json`.
+//! process's CPU time, which a shared machine does not inflate). With `ASSEMBLY_MIXED=1` the
+//! tangents carry the mixed-stress records of a nonlinear static step (each assembly
+//! extrapolates the last one's records and writes its own); with `ASSEMBLY_FLUSH=1` the
+//! caches are swept between assemblies. The Newton solver's own split is in `summary.json`.
 
 use std::path::Path;
 use std::sync::Arc;
@@ -250,14 +252,18 @@ fn scene(path: &str, repeats: usize) -> Result<(), String> {
     let (_, built) = plyshell::scene::load(Path::new(path)).map_err(|e| e.to_string())?;
     let model = &built.model;
     let t = Instant::now();
-    let asm = Assembler::new(model);
+    let mut asm = Assembler::new(model);
+    // ASSEMBLY_MIXED=1: tangents with mixed-stress records, as a nonlinear static step
+    // assembles them (each extrapolates the last assembly's records and writes its own).
+    asm.mixed = std::env::var_os("ASSEMBLY_MIXED").is_some();
     let n_el = model.elements.len();
     println!(
-        "elements {n_el} ({} with tied DOFs, scattered serially), dofs {}, nnz {}, pattern {:.3} s",
+        "elements {n_el} ({} with tied DOFs, scattered serially), dofs {}, nnz {}, pattern {:.3} s{}",
         asm.n_serial(),
         model.dofs.n_free,
         asm.nnz(),
-        t.elapsed().as_secs_f64()
+        t.elapsed().as_secs_f64(),
+        if asm.mixed { ", mixed-stress records" } else { "" }
     );
     // A deformed state: a small smooth perturbation of every free DOF.
     let mut state = model.initial_state();
