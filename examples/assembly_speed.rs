@@ -17,8 +17,11 @@
 //! `cargo run --release --example assembly_speed -- SCENE.ron [REPEATS]`: seconds per
 //! global assembly (element evaluation + scatter) of a scene's model in a deformed state,
 //! with and without the tangent, on 1 and 2 threads (median of REPEATS; wall time and the
-//! process's CPU time, which a shared machine does not inflate). The Newton
-//! solver's own split is in `summary.json`.
+//! process's CPU time, which a shared machine does not inflate). With `ASSEMBLY_MIXED=1` the
+//! tangents carry the mixed-stress records of a nonlinear static step (each assembly
+//! extrapolates the last one's records and writes its own); with `ASSEMBLY_KEEP=1` they keep
+//! every element's response (the time steps of a Dynamic step to rest); with `ASSEMBLY_FLUSH=1` the
+//! caches are swept between assemblies. The Newton solver's own split is in `summary.json`.
 
 use std::path::Path;
 use std::sync::Arc;
@@ -250,19 +253,34 @@ fn scene(path: &str, repeats: usize) -> Result<(), String> {
     let (_, built) = plyshell::scene::load(Path::new(path)).map_err(|e| e.to_string())?;
     let model = &built.model;
     let t = Instant::now();
-    let asm = Assembler::new(model);
+    let mut asm = Assembler::new(model);
+    // ASSEMBLY_MIXED=1: tangents with mixed-stress records, as a nonlinear static step
+    // assembles them (each extrapolates the last assembly's records and writes its own).
+    asm.mixed = std::env::var_os("ASSEMBLY_MIXED").is_some();
+    // ASSEMBLY_KEEP=1: tangent assemblies keep every element's response, as the time steps
+    // of a Dynamic step to rest do (for a projected re-assembly of the same state).
+    asm.keep_responses = std::env::var_os("ASSEMBLY_KEEP").is_some();
     let n_el = model.elements.len();
     println!(
-        "elements {n_el} ({} with tied DOFs, scattered serially), dofs {}, nnz {}, pattern {:.3} s",
+        "elements {n_el} ({} with tied DOFs, scattered serially), dofs {}, nnz {}, pattern {:.3} s{}",
         asm.n_serial(),
         model.dofs.n_free,
         asm.nnz(),
-        t.elapsed().as_secs_f64()
+        t.elapsed().as_secs_f64(),
+        match (asm.mixed, asm.keep_responses) {
+            (true, true) => ", mixed-stress records, kept responses",
+            (true, false) => ", mixed-stress records",
+            (false, true) => ", kept responses",
+            (false, false) => "",
+        }
     );
-    // A deformed state: a small smooth perturbation of every free DOF.
-    let mut state = model.initial_state();
+    // A deformed state: a small smooth perturbation of every free DOF; and a second one
+    // 1 % further, so that successive assemblies alternate between two states (as Newton's
+    // do: kept responses are not reused, mixed-stress records are extrapolated).
+    let mut states = [model.initial_state(), model.initial_state()];
     let du: Vec<f64> = (0..model.dofs.n_free).map(|i| 1e-5 * ((i % 17) as f64 - 8.0)).collect();
-    model.update(&mut state, &du, 1.0);
+    model.update(&mut states[0], &du, 1.0);
+    model.update(&mut states[1], &du, 1.01);
     let mut f = vec![0.0; 5 * model.n_nodes()];
     let mut vals = vec![0.0; asm.nnz()];
     // ASSEMBLY_FLUSH=1: sweep 256 MB between assemblies (cold caches, as inside Newton).
@@ -273,7 +291,8 @@ fn scene(path: &str, repeats: usize) -> Result<(), String> {
         for with_tangent in [true, false] {
             let mut times = Vec::new();
             let mut cpu = Vec::new();
-            for _ in 0..repeats {
+            for repeat in 0..repeats {
+                let state = &states[repeat % 2];
                 if flush {
                     // Evict the caches as a factorization between two assemblies does.
                     sweep.iter_mut().for_each(|v| *v += 1.0);
@@ -282,7 +301,7 @@ fn scene(path: &str, repeats: usize) -> Result<(), String> {
                 let t = Instant::now();
                 let c = process_seconds();
                 let values = if with_tangent { Some(vals.as_mut_slice()) } else { None };
-                pool.install(|| asm.assemble(model, &state, &mut f, values)).map_err(|e| format!("element {}: {}", e.element, e.failure))?;
+                pool.install(|| asm.assemble(model, state, &mut f, values)).map_err(|e| format!("element {}: {}", e.element, e.failure))?;
                 times.push(t.elapsed().as_secs_f64());
                 cpu.push(process_seconds() - c);
             }

@@ -433,9 +433,10 @@ impl Assembler {
                 let (records, at) = unsafe { (std::slice::from_raw_parts_mut(m.records.add(lo), hi - lo), &mut *m.at.add(e)) };
                 let mut geo = [Voigt5::zeros(); MAX_MIXED_POINTS];
                 let geo = at.as_ref().map(|(u0, f0)| {
-                    extrapolate(records, &unknown_change(u0, f0, &x, &frames), &mut geo[..hi - lo]);
-                    &geo[..hi - lo]
+                    extrapolate(rule, geom, u0, f0, &unknown_change(u0, f0, &x, &frames), records, &mut geo[..hi - lo])?;
+                    Ok(&geo[..hi - lo])
                 });
+                let geo = geo.transpose().map_err(fail)?;
                 let out = element.response_mixed(rule, geom, &x, &frames, k.as_deref_mut(), Some(Mixed { geo, record: records }));
                 *at = out.is_ok().then_some((x, frames));
                 out

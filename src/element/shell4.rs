@@ -182,7 +182,7 @@ pub struct ShellElement<'a> {
 /// Natural strain components [E_ξξ, E_ηη, E_ξη, E_ξζ, E_ηζ] of a point from the pair strains
 /// `e` of its level.
 #[inline(always)]
-fn natural_strain(comps: &[Comp; 5], e: &[f64; MAX_PAIRS]) -> Voigt5 {
+pub(super) fn natural_strain(comps: &[Comp; 5], e: &[f64; MAX_PAIRS]) -> Voigt5 {
     let mut nat = Voigt5::zeros();
     for (c, comp) in comps.iter().enumerate() {
         for (t, w) in comp.terms() {
@@ -478,6 +478,9 @@ impl<'a> ShellElement<'a> {
                         }
                     }
                     let d = d * pg.wdet;
+                    if let Some(rec) = record.as_deref_mut() {
+                        rec[base + i].dw = d;
+                    }
                     let mut slot = n_rows;
                     for r in 0..5 {
                         let mut dbr: Row = [0.0; ELEMENT_DOFS];
@@ -486,9 +489,6 @@ impl<'a> ShellElement<'a> {
                             if dq != 0.0 {
                                 dbr.iter_mut().zip(bq).for_each(|(x, y)| *x += dq * y);
                             }
-                        }
-                        if let Some(rec) = record.as_deref_mut() {
-                            rec[base + i].db[r] = dbr;
                         }
                         if r == 2 && rule.centre_shear {
                             db_shear.iter_mut().zip(&dbr).for_each(|(x, y)| *x += y);
@@ -804,7 +804,7 @@ pub(super) mod tests {
                 let mismatch = |h: f64| {
                     let (xb, fb) = apply(&xa, &fa, &(dir * h));
                     let mut geo = vec![Voigt5::zeros(); n];
-                    extrapolate(&records, &unknown_change(&xa, &fa, &xb, &fb), &mut geo);
+                    extrapolate(&rule, &geom, &xa, &fa, &unknown_change(&xa, &fa, &xb, &fb), &records, &mut geo).unwrap();
                     let mut scratch = vec![PointRecord::default(); n];
                     let (mut k_std, mut k_mix) = (ElemMat::zeros(), ElemMat::zeros());
                     let (f_std, _) = el.response_into(&rule, &geom, &xb, &fb, Some(&mut k_std)).unwrap();

@@ -283,7 +283,7 @@ mod tests {
                 let step = ElemVec::from_fn(|i, _| 0.01 * ((i % 7) as f64 - 3.0));
                 let (xb, fb) = apply(&x, &f, &step);
                 let mut geo = vec![Voigt5::zeros(); n];
-                extrapolate(&records, &unknown_change(&x, &f, &xb, &fb), &mut geo);
+                extrapolate(&rule, &geom, &x, &f, &unknown_change(&x, &f, &xb, &fb), &records, &mut geo).unwrap();
                 let mut out = Vec::new();
                 for r in [&rule, &plain] {
                     let mut scratch = vec![PointRecord::default(); n];
