@@ -30,8 +30,9 @@ fn extrapolate(state: &mut State, old: &State, ratio: f64) {
     }
 }
 
-/// Consecutive failed attempts (each retried at a quarter of the increment, so the last at
-/// 4⁻⁴ of the one that last converged) after which a Static step leaves plain Newton for the
+/// Consecutive failed attempts after a converged increment (each retried at a quarter of the
+/// increment, so the last at 4⁻⁴ of the one that last converged) after which a Static step
+/// leaves plain Newton for the
 /// damped iteration, and the damped iteration for the pseudo-transient step to rest, instead
 /// of cutting on to `max_cutbacks` quarterings of the first increment. Measured on the 5 mm
 /// two-ply flap with barrier inter-ply contact: the ten plain and ten damped cut-backs that
@@ -47,7 +48,8 @@ impl Solver<'_> {
     /// exactly at its target scales. Returns the scales reached.
     ///
     /// Where plain Newton would give up — the increment cut [`FALLBACK_AFTER`] times in a row
-    /// (or below `max_cutbacks` quarterings of the first increment) in a model
+    /// after the step has moved (or below `max_cutbacks` quarterings of the first increment)
+    /// in a model
     /// supported against every rigid motion (not a mechanism: a limit or bifurcation point
     /// passed, wrinkling, plies sliding over each other, contact's round-off) —
     /// the rest of the step runs damped Newton (the `StaticDamped` iteration, Levenberg–
@@ -154,7 +156,9 @@ impl Solver<'_> {
                     failures_in_row += 1;
                     dtau *= 0.25;
                     let spent = dtau < min_dtau * (1.0 - 1e-9);
-                    let stalled = spent || failures_in_row >= FALLBACK_AFTER;
+                    // In a row only once the step has moved: before its first converged
+                    // increment the cut-backs search for an increment size that works.
+                    let stalled = spent || (inc > 0 && failures_in_row >= FALLBACK_AFTER);
                     if stalled && !damped && super::diagnose::unsupported_directions(self.model).is_empty() {
                         damped = true;
                         dtau = first_dtau;
