@@ -29,9 +29,9 @@ fn text(n: usize, refine: &str) -> String {
 fn solve(t: &str, tol: Option<f64>) -> Result<(plyshell::results::Summary, plyshell::model::Model, f64), String> {
     let sc = scene::parse("sphere.ron", t).map_err(|e| e.to_string())?;
     let b = scene::build(&sc, "sphere.ron", t).map_err(|e| e.to_string())?;
-    let c0 = plyshell::study::cpu_seconds();
+    let c0 = plyshell::cpu_time::process_seconds();
     let s = analysis::run(&sc, &b, &Default::default(), &mut |_| {}).map_err(|e| e.to_string())?;
-    let cpu = plyshell::study::cpu_seconds() - c0;
+    let cpu = plyshell::cpu_time::process_seconds() - c0;
     // The refined model: the pass's scene rebuilt (one pass).
     let model = match tol {
         None => b.model,

@@ -74,11 +74,17 @@ pub struct StudyRow {
     /// the deformed garment surfaces (both ways), over the reference garment's size.
     pub shape_rms: f64,
     pub shape_max: f64,
-    /// Largest relative error over the seams of the mean force per length (plies of a
-    /// seam summed), against the reference; None without seams.
+    /// Largest error over the seams of the mean force per length (plies of a seam summed)
+    /// against the reference, relative to the load the seam's plies carry in the reference
+    /// (the sum of the plies' own mean force magnitudes; for a one-ply seam its force):
+    /// where the plies of a seam pull against each other the net force is a small difference
+    /// of large ones, and an error relative to it measures nothing. None without seams.
     pub seam_force_error: Option<f64>,
-    /// Mean force per length of each seam (N/m, plies summed).
-    pub seam_forces: Vec<(String, f64)>,
+    /// The same error relative to the reference's net (ply-summed) force itself.
+    pub seam_force_error_net: Option<f64>,
+    /// Mean force per length of each seam (N/m): plies summed, and the plies' magnitudes
+    /// added (the load the plies carry).
+    pub seam_forces: Vec<SeamForce>,
     /// Smallest and mean clearance of the garment's nodes (faces) to the bodies (m), if any
     /// body; and the difference of the mean from the reference's (m).
     pub clearance_min: Option<f64>,
@@ -91,16 +97,6 @@ pub struct StudyRow {
     /// the solves run (1: the laminate was kept; 2: laminate, then the resolved model).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub auto: Option<serde_json::Value>,
-}
-
-/// Process CPU time (user + system, s) from /proc/self/stat (Linux; 0 elsewhere).
-pub fn cpu_seconds() -> f64 {
-    let Ok(s) = std::fs::read_to_string("/proc/self/stat") else { return 0.0 };
-    // Fields after the parenthesised command name: state is field 3, utime 14, stime 15.
-    let Some(rest) = s.rfind(')').map(|i| &s[i + 1..]) else { return 0.0 };
-    let f: Vec<&str> = rest.split_whitespace().collect();
-    let ticks = |k: usize| f.get(k).and_then(|v| v.parse::<f64>().ok()).unwrap_or(0.0);
-    (ticks(11) + ticks(12)) / 100.0
 }
 
 /// The garment's deformed surface of one run: node positions and garment triangles.
@@ -173,8 +169,8 @@ fn shape_error(run: &Surface, reference: &Surface) -> (f64, f64) {
 /// [`crate::garment::compliant::ply_summed`]: a ply pushed into compression at the seam counts
 /// against one in tension), else — plies whose seam rows differ — the plies' mean magnitudes
 /// added.
-fn seam_forces(summary: &Summary) -> Vec<(String, f64)> {
-    let mut out: Vec<(String, f64)> = Vec::new();
+fn seam_forces(summary: &Summary) -> Vec<SeamForce> {
+    let mut out: Vec<SeamForce> = Vec::new();
     let Some(list) = summary.extra.get("seams").and_then(|v| v.as_array()) else { return out };
     let summed = |base: &str| {
         summary.extra.get("seams_plies_summed").and_then(|v| v.as_array()).and_then(|a| a.iter().find(|s| s.get("name").and_then(|n| n.as_str()) == Some(base))).and_then(|s| s.get("force_per_length_mean").and_then(|v| v.as_f64()))
@@ -182,18 +178,29 @@ fn seam_forces(summary: &Summary) -> Vec<(String, f64)> {
     for s in list {
         let (Some(name), Some(f)) = (s.get("name").and_then(|v| v.as_str()), s.get("force_per_length_mean").and_then(|v| v.as_f64())) else { continue };
         let base = name.split('/').next().unwrap_or(name).to_string();
-        if let Some(total) = summed(&base) {
-            if !out.iter().any(|(n, _)| *n == base) {
-                out.push((base, total));
+        let net = summed(&base);
+        match out.iter_mut().find(|e| e.name == base) {
+            Some(e) => {
+                e.ply_load += f;
+                if net.is_none() {
+                    e.net += f;
+                }
             }
-            continue;
-        }
-        match out.iter_mut().find(|(n, _)| *n == base) {
-            Some(e) => e.1 += f,
-            None => out.push((base, f)),
+            None => out.push(SeamForce { net: net.unwrap_or(f), ply_load: f, name: base }),
         }
     }
     out
+}
+
+/// One seam's mean force per length in a study run (N/m).
+#[derive(Clone, Debug, Serialize)]
+pub struct SeamForce {
+    /// Seam name (without the `/ply` suffix of a multi-ply seam).
+    pub name: String,
+    /// Plies summed as vectors node by node (a one-ply seam: its force).
+    pub net: f64,
+    /// The plies' mean force magnitudes added: the load the plies carry through the seam.
+    pub ply_load: f64,
 }
 
 /// Smallest and mean clearance of the garment's nodes to the scene's bodies: signed distance
@@ -273,7 +280,7 @@ struct Run {
 
 #[allow(clippy::too_many_arguments)]
 fn solve(file: &str, text: &str, scene: &Scene, label: &str, mesh: String, ply: PlyModel, out: Option<PathBuf>, log: &mut dyn FnMut(&str)) -> Result<Run, String> {
-    let (c0, t0) = (cpu_seconds(), Instant::now());
+    let (c0, t0) = (crate::cpu_time::process_seconds(), Instant::now());
     if ply == PlyModel::Auto {
         return solve_auto(file, text, scene, label, mesh, out, log);
     }
@@ -289,7 +296,7 @@ fn solve(file: &str, text: &str, scene: &Scene, label: &str, mesh: String, ply: 
         Err(analysis::RunError::Solve { error, summary }) => (*summary, format!("failed: {error}"), None),
         Err(e) => return Err(format!("{label}: {e}")),
     };
-    let timing = Timing { build_s, wall_s: t1.elapsed().as_secs_f64(), cpu_s: cpu_seconds() - c0 };
+    let timing = Timing { build_s, wall_s: t1.elapsed().as_secs_f64(), cpu_s: crate::cpu_time::process_seconds() - c0 };
     let mut run = measured_run(label, ply, mesh, last.as_ref().map_or(&built, |l| &l.1), &summary, status, timing);
     if let Some(passes) = summary.extra.get("refinement").and_then(|r| r.get("passes")).and_then(|p| p.as_array()) {
         // Every pass's iterations: the first solve's and each continuation's.
@@ -335,6 +342,7 @@ fn measured_run(label: &str, ply: PlyModel, mesh: String, built: &BuiltScene, su
         shape_rms: 0.0,
         shape_max: 0.0,
         seam_force_error: None,
+        seam_force_error_net: None,
         seam_forces: seam_forces(summary),
         clearance_min: clear.map(|c| c.0),
         clearance_mean: clear.map(|c| c.1),
@@ -349,13 +357,13 @@ fn measured_run(label: &str, ply: PlyModel, mesh: String, built: &BuiltScene, su
 /// An `Auto` run (`analysis_auto`: laminate, then discrete plies where they would slide):
 /// build and solve times of both passes together.
 fn solve_auto(file: &str, text: &str, scene: &Scene, label: &str, mesh: String, out: Option<PathBuf>, log: &mut dyn FnMut(&str)) -> Result<Run, String> {
-    let (c0, t0) = (cpu_seconds(), Instant::now());
+    let (c0, t0) = (crate::cpu_time::process_seconds(), Instant::now());
     log(&format!("{label}: ply_model Auto, solving (laminate first)…"));
     let (run, status) = match crate::analysis_auto::run(scene, file, text, &RunOptions { out_dir: out }, &mut |_| {}) {
         Ok(r) => (r, "completed".to_string()),
         Err(e) => return Err(format!("{label}: {e}")),
     };
-    let timing = Timing { build_s: 0.0, wall_s: t0.elapsed().as_secs_f64(), cpu_s: cpu_seconds() - c0 };
+    let timing = Timing { build_s: 0.0, wall_s: t0.elapsed().as_secs_f64(), cpu_s: crate::cpu_time::process_seconds() - c0 };
     for line in crate::analysis_auto::describe(&run) {
         log(&format!("{label}: {line}"));
     }
@@ -374,14 +382,18 @@ fn compare(runs: &mut [Run], reference: usize) {
         let (rms, max) = if i == reference { (0.0, 0.0) } else { shape_error(&run.surface, &rs) };
         run.row.shape_rms = rms;
         run.row.shape_max = max;
-        run.row.seam_force_error = (!rf.is_empty()).then(|| {
-            rf.iter()
-                .map(|(name, f_ref)| {
-                    let f = run.row.seam_forces.iter().find(|(n, _)| n == name).map_or(0.0, |x| x.1);
-                    (f - f_ref).abs() / f_ref.abs().max(1e-300)
-                })
-                .fold(0.0, f64::max)
-        });
+        let largest = |scale: &dyn Fn(&SeamForce) -> f64| {
+            (!rf.is_empty()).then(|| {
+                rf.iter()
+                    .map(|r| {
+                        let f = run.row.seam_forces.iter().find(|e| e.name == r.name).map_or(0.0, |e| e.net);
+                        (f - r.net).abs() / scale(r).abs().max(1e-300)
+                    })
+                    .fold(0.0, f64::max)
+            })
+        };
+        run.row.seam_force_error = largest(&|r| r.ply_load);
+        run.row.seam_force_error_net = largest(&|r| r.net);
         run.row.clearance_error = run.row.clearance_mean.zip(rc).map(|(a, b)| a - b);
         run.row.drape_error = run.row.drape_coefficient.zip(rd).map(|(a, b)| a - b);
     }
@@ -494,6 +506,7 @@ fn failed_row(label: String, mesh: String, ply: PlyModel, error: String) -> Stud
         shape_rms: f64::NAN,
         shape_max: f64::NAN,
         seam_force_error: None,
+        seam_force_error_net: None,
         seam_forces: Vec::new(),
         clearance_min: None,
         clearance_mean: None,
@@ -512,16 +525,20 @@ fn pct(v: Option<f64>) -> String {
 /// The Markdown table of a study.
 pub fn markdown(scene: &str, rows: &[StudyRow]) -> String {
     let mut t = format!(
-        "# Study of `{scene}`\n\nErrors against the last row (finest mesh, discrete plies). Shape: closest-point distance between the deformed garment surfaces (both ways), RMS and max, in % of the reference garment's size; seam force: largest relative error of a seam's mean force per length (plies summed); clearance: mean clearance of the garment faces to the bodies, difference from the reference (mm); DC: drape coefficient (%), difference in points. Times: wall and process CPU (all threads) of the solve, on a shared machine.\n\n"
+        "# Study of `{scene}`\n\nErrors against the last row (finest mesh, discrete plies). Shape: closest-point distance between the deformed garment surfaces (both ways), RMS and max, in % of the reference garment's size; seam force: largest error of a seam's mean force per length (plies summed), relative to the load its plies carry (their mean force magnitudes added; a one-ply seam: its force), and in brackets relative to the net force itself, which is a small difference of large ones where plies pull against each other; clearance: mean clearance of the garment faces to the bodies, difference from the reference (mm); DC: drape coefficient (%), difference in points. Times: wall and process CPU (all threads) of the solve, on a shared machine.\n\n"
     );
     t.push_str("| run | h (mm) | nodes | DOFs | Newton | wall s | CPU s | shape RMS % | shape max % | seam force err % | clearance mm (Δ) | DC % (Δ) | status |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
     for r in rows {
         let h = if (r.element_size[1] - r.element_size[0]).abs() <= 1e-9 * r.element_size[1] { format!("{:.1}", 1e3 * r.element_size[0]) } else { format!("{:.1}–{:.1}", 1e3 * r.element_size[0], 1e3 * r.element_size[1]) };
         let clear = r.clearance_mean.map_or("–".into(), |c| format!("{:.1} ({:+.1})", 1e3 * c, 1e3 * r.clearance_error.unwrap_or(0.0)));
         let dc = r.drape_coefficient.map_or("–".into(), |c| format!("{c:.1} ({:+.1})", r.drape_error.unwrap_or(0.0)));
+        let seam = match r.seam_force_error_net {
+            Some(_) => format!("{} ({})", pct(r.seam_force_error), pct(r.seam_force_error_net)),
+            None => pct(r.seam_force_error),
+        };
         t.push_str(&format!(
             "| {} | {h} | {} | {} | {} | {:.1} | {:.1} | {:.3} | {:.3} | {} | {clear} | {dc} | {} |\n",
-            r.label, r.nodes, r.dofs, r.newton_iterations, r.wall_s, r.cpu_s, 100.0 * r.shape_rms, 100.0 * r.shape_max, pct(r.seam_force_error), r.status
+            r.label, r.nodes, r.dofs, r.newton_iterations, r.wall_s, r.cpu_s, 100.0 * r.shape_rms, 100.0 * r.shape_max, seam, r.status
         ));
     }
     let autos: Vec<&StudyRow> = rows.iter().filter(|r| r.auto.is_some()).collect();

@@ -210,17 +210,17 @@ pub fn run_refined(scene: &Scene, built: &BuiltScene, options: &RunOptions, prog
     let Some(spec) = requested(scene).cloned() else {
         return crate::analysis::run_unrefined(scene, built, options, progress).map(|s| (s, None));
     };
-    let cpu0 = crate::study::cpu_seconds();
+    let cpu0 = crate::cpu_time::process_seconds();
     let first = crate::analysis::run_unrefined(scene, built, &RunOptions::default(), progress)?;
     let mut passes = vec![json!({
         "pass": 0, "elements": built.model.elements.len(), "dofs": first.sizes.dofs,
         "time_steps": first.increments.len(), "newton_iterations": first.newton_iterations,
-        "cpu_s": crate::study::cpu_seconds() - cpu0,
+        "cpu_s": crate::cpu_time::process_seconds() - cpu0,
     })];
     let mut state = first.final_state.ok_or_else(|| RunError::Setup("refinement: the first solve kept no final state".into()))?;
     let mut current: Option<(Scene, BuiltScene)> = None;
     for pass in 1..=spec.passes {
-        let cpu = crate::study::cpu_seconds();
+        let cpu = crate::cpu_time::process_seconds();
         let fail = |e: String| RunError::Setup(format!("refinement pass {pass}: {e}"));
         let old_built = current.as_ref().map_or(built, |c| &c.1);
         let old = &old_built.model;
@@ -238,14 +238,14 @@ pub fn run_refined(scene: &Scene, built: &BuiltScene, options: &RunOptions, prog
         let residual_mapped = crate::analysis_sequence::mapped_residual(&sc, &b, &mut mapped).map_err(fail)?;
         let relaxation = if spec.relax_directors { crate::analysis_sequence::relax_directors(&sc, &b, &mut mapped).map_err(fail)? } else { (0, 0) };
         // Membrane-consistent mapping (`relax`): one proximal stage with the normal spring.
-        let cpu_relax = crate::study::cpu_seconds();
+        let cpu_relax = crate::cpu_time::process_seconds();
         let membrane = if spec.relax_membrane { Some(relax::stage(&sc, &b, &mut mapped, Some(relax::TAU_S)).map_err(fail)?) } else { None };
         // The stage measured the residual of the state it leaves (a new solver each time).
         let residual = match &membrane {
             Some(m) => m.static_residual,
             None => crate::analysis_sequence::mapped_residual(&sc, &b, &mut mapped).map_err(fail)?,
         };
-        let cpu_relax = crate::study::cpu_seconds() - cpu_relax;
+        let cpu_relax = crate::cpu_time::process_seconds() - cpu_relax;
         let last = pass == spec.passes;
         let scales = b.steps.last().map(|s| s.target_scales.clone()).unwrap_or_default();
         let old_scales = match &current { Some(c) => c.1.steps.last(), None => built.steps.last() }.map(|s| s.target_scales.clone()).unwrap_or_default();
@@ -254,10 +254,10 @@ pub fn run_refined(scene: &Scene, built: &BuiltScene, options: &RunOptions, prog
         // The continuation: the minimisation without the spring (skipped if it does not
         // converge in one solve), then the step to rest from Δt = 10 τ (the default first
         // step's ramp, 1 ms × 1.5ᵏ, is what the relaxed state no longer needs).
-        let cpu_descent = crate::study::cpu_seconds();
+        let cpu_descent = crate::cpu_time::process_seconds();
         let relaxed = membrane.as_ref().is_some_and(|m| m.failed.is_none());
         let descent = if relaxed { Some(relax::stage(&sc, &b, &mut mapped, None).map_err(fail)?) } else { None };
-        let cpu_descent = crate::study::cpu_seconds() - cpu_descent;
+        let cpu_descent = crate::cpu_time::process_seconds() - cpu_descent;
         if relaxed
             && let Some(StepKind::Dynamic(ds)) = b.steps.last_mut().map(|s| &mut s.kind)
         {
@@ -288,7 +288,7 @@ pub fn run_refined(scene: &Scene, built: &BuiltScene, options: &RunOptions, prog
         report["dofs"] = json!(summary.sizes.dofs);
         report["time_steps"] = json!(summary.increments.len());
         report["newton_iterations"] = json!(summary.newton_iterations);
-        report["cpu_s"] = json!(crate::study::cpu_seconds() - cpu);
+        report["cpu_s"] = json!(crate::cpu_time::process_seconds() - cpu);
         if let Some(rest) = summary.final_state.as_ref() {
             report["potential_rest_j"] = json!(potential(&b.model, rest, &scales));
         }
@@ -296,7 +296,7 @@ pub fn run_refined(scene: &Scene, built: &BuiltScene, options: &RunOptions, prog
         state = summary.final_state.clone().ok_or_else(|| fail("the continued solve kept no final state".into()))?;
         if last {
             let (_, ind) = plan_of(&b, &state, spec.tolerance).map_err(fail)?;
-            summary.extra.insert("refinement".into(), json!({ "tolerance": spec.tolerance, "passes": passes, "cpu_s": crate::study::cpu_seconds() - cpu0 }));
+            summary.extra.insert("refinement".into(), json!({ "tolerance": spec.tolerance, "passes": passes, "cpu_s": crate::cpu_time::process_seconds() - cpu0 }));
             if let Some(dir) = &options.out_dir {
                 write_indicator_vtu(dir, &sc, &b, &state, &ind, spec.tolerance)?;
                 summary.files.push(format!("{}_refinement.vtu", sc.name));
