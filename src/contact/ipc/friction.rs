@@ -38,17 +38,24 @@ pub(super) struct FrictionTerm {
     pub(super) force: Vector3<f64>,
 }
 
-/// Friction potentials D = μλ̄ δ ln cosh(|s|/δ) of the committed pairs `map` at `x`, s the
+/// The committed pairs of `map` that carry friction (normal force λ̄ > 0), in the map's
+/// order: the list [`terms`] runs over, kept from one commit to the next (collected from the
+/// map in every evaluation, serially, it cost 0.4 s of the NBC sleeve on the arm).
+pub(super) fn committed<S: std::hash::BuildHasher>(map: &HashMap<(Kind, usize, usize), Friction, S>) -> Vec<((Kind, usize, usize), Friction)> {
+    map.iter().filter(|(_, h)| h.force > 0.0).map(|(k, h)| (*k, h.clone())).collect()
+}
+
+/// Friction potentials D = μλ̄ δ ln cosh(|s|/δ) of the `committed` pairs at `x`, s the
 /// slip of the pair's weighted points from their anchor in the lagged tangent plane, with
 /// gradient and (when `hessian`) the exact Hessian, positive semi-definite.
-pub(super) fn terms<S: std::hash::BuildHasher + Sync>(map: &HashMap<(Kind, usize, usize), Friction, S>, mu: f64, x: &(dyn Fn(usize) -> Vector3<f64> + Sync), hessian: bool) -> Vec<FrictionTerm> {
+pub(super) fn terms(committed: &[((Kind, usize, usize), Friction)], mu: f64, x: &(dyn Fn(usize) -> Vector3<f64> + Sync), hessian: bool) -> Vec<FrictionTerm> {
     if mu == 0.0 {
         return Vec::new();
     }
-    let committed: Vec<(&(Kind, usize, usize), &Friction)> = map.iter().filter(|(_, h)| h.force > 0.0).collect();
     committed
-        .into_par_iter()
-        .map(|(&key, h)| {
+        .par_iter()
+        .map(|(key, h)| {
+            let key = *key;
             let r: Vector3<f64> = (0..4).map(|k| x(h.nodes[k]) * h.weights[k]).sum();
             let p = Matrix3::identity() - h.normal * h.normal.transpose();
             let s = p * (r - h.anchor);

@@ -149,6 +149,9 @@ struct Term {
     /// Gradient and Hessian in all four nodes of a pair with the edge–edge mollifier (it
     /// depends on more than the distance), when derivatives were asked for.
     mollified: Option<Box<Derivative>>,
+    /// A nearly parallel edge–edge pair inside the mollifier's range, differentiated on its
+    /// own (`mollified`), not with its feature.
+    parallel: bool,
     gap: f64,
     dhat: f64,
     /// Mollifier threshold (edge–edge), 0 for point–triangle.
@@ -160,6 +163,16 @@ struct Term {
     force: f64,
     normal: Vector3<f64>,
     weights: [f64; 4],
+}
+
+/// What an evaluation's terms still lack once its pairs are measured (`add_coupled`).
+enum Pending {
+    /// Nothing: the last evaluation's terms again.
+    Nothing,
+    /// The derivatives of the mollified pairs of a kept trial ([`SurfaceContact::trial_mollified`]).
+    Mollified,
+    /// The friction terms.
+    Friction,
 }
 
 /// Barrier contact between shell surfaces (a [`NodalForces`] term).
@@ -197,6 +210,8 @@ pub struct SurfaceContact {
     /// The broad phase's trees, refitted from search to search.
     trees: Mutex<Trees>,
     friction: FxMap<(Kind, usize, usize), Friction>,
+    /// The pairs of `friction` with a normal force, in its order (`friction::committed`).
+    committed: Vec<((Kind, usize, usize), Friction)>,
     /// Reference constants per candidate pair (None: excluded), filled as pairs come near.
     constants: RwLock<FxMap<(Kind, usize, usize), Option<Constants>>>,
     last: Vec<Term>,
@@ -347,6 +362,7 @@ impl SurfaceContact {
             near: Mutex::new(None),
             trees: Mutex::new(Trees::default()),
             friction: FxMap::default(),
+            committed: Vec::new(),
             constants: RwLock::new(FxMap::default()),
             last: Vec::new(),
             last_friction: Vec::new(),
@@ -377,7 +393,7 @@ impl SurfaceContact {
     /// written in place: a derivative is 1.3 KB, and building, zeroing and moving each one
     /// cost more than its arithmetic); the mollified pairs' are those of their terms.
     fn barrier_derivatives(&self, terms: &[Term], x: &(dyn Fn(usize) -> Vector3<f64> + Sync), out: &mut Vec<Derivative>) {
-        let grouped = group(terms.iter().filter(|t| t.mollified.is_none() && t.energy.is_finite()).map(|t| (t.feature, t.scalar)));
+        let grouped = group(terms.iter().filter(|t| !t.parallel && t.energy.is_finite()).map(|t| (t.feature, t.scalar)));
         if out.len() < grouped.len() {
             out.resize(grouped.len(), Derivative::zero());
         }
@@ -387,7 +403,7 @@ impl SurfaceContact {
 
     /// Friction potentials of the committed pairs at `x`.
     fn friction_terms(&self, x: &(dyn Fn(usize) -> Vector3<f64> + Sync), hessian: bool) -> Vec<FrictionTerm> {
-        super::friction::terms(&self.friction, self.settings.friction, x, hessian)
+        super::friction::terms(&self.committed, self.settings.friction, x, hessian)
     }
 
     /// Pairs closer than zero gap at `state` (start intersecting): (nodes, gap).
@@ -413,20 +429,22 @@ impl NodalForces for SurfaceContact {
         let x = |a: usize| model.x0[a] + state.u[a];
         let same = |a: &Vector3<f64>, b: &Vector3<f64>| a.iter().zip(b.iter()).all(|(p, q)| p.to_bits() == q.to_bits());
         let again = self.last_u.len() == self.points.len() && self.points.iter().zip(&self.last_u).all(|(&a, u)| same(&state.u[a], u));
-        let (terms, fr) = if again {
+        // What the terms still lack: the derivatives of a kept trial's mollified pairs, or
+        // the friction terms of a state measured here.
+        let (mut terms, fr, pending) = if again {
             // The state of the last evaluation again, with κ and the friction anchors as they
             // were (a commit clears `last_u`): the tangent projected onto the PSD cone
             // (`project_hessians`, 351 of the 5 cm NBC hood's 1525 iterations). Its pairs and
             // friction terms do not depend on the projection; only their derivatives are
             // formed again.
-            (std::mem::take(&mut self.last), std::mem::take(&mut self.last_friction))
+            (std::mem::take(&mut self.last), std::mem::take(&mut self.last_friction), Pending::Nothing)
         } else {
             let candidates = self.candidates_at(&x);
-            match self.take_trial(state, &candidates, &x) {
+            match self.take_trial(state, &candidates) {
                 // A trial state of the line search, measured by `potential_at`.
                 Some(trial) => {
                     self.start_gaps = Some((candidates, trial.gaps));
-                    (trial.terms, trial.friction)
+                    (trial.terms, trial.friction, Pending::Mollified)
                 }
                 None => {
                     let mut gaps = self.start_gaps.take().map(|g| g.1).unwrap_or_default();
@@ -434,7 +452,7 @@ impl NodalForces for SurfaceContact {
                     let terms = self.evaluate_pairs(&candidates, &x, true, skip.as_deref(), Some(&mut gaps));
                     // Kept for the collision detection of the step from this state (`max_step`).
                     self.start_gaps = Some((candidates, gaps));
-                    (terms, self.friction_terms(&x, true))
+                    (terms, Vec::new(), Pending::Friction)
                 }
             }
         };
@@ -450,14 +468,35 @@ impl NodalForces for SurfaceContact {
             }
             pot += term.energy;
         }
+        // By reference: a derivative is 1.3 KB, and moving each out of the list cost more
+        // than adding it.
+        let mut derivatives = std::mem::take(&mut self.derivatives);
+        // The same terms again (see above): their exact derivatives, when kept, again.
+        let derive = pot.is_finite() && !(again && self.derivatives_exact);
+        // The per-feature derivatives (whose grouping is a serial sort) alongside what the
+        // terms still lack (parallel), so that the sort does not leave a thread idle; the
+        // same values as one after the other.
+        let (_, (mollified, fr, pending_s)) = rayon::join(
+            || {
+                if derive {
+                    self.barrier_derivatives(&terms, &x, &mut derivatives);
+                }
+            },
+            || {
+                let t = Instant::now();
+                let (m, f) = match pending {
+                    Pending::Nothing => (Vec::new(), fr),
+                    Pending::Mollified => (self.trial_mollified(&terms, &x), fr),
+                    Pending::Friction => (Vec::new(), self.friction_terms(&x, true)),
+                };
+                (m, f, t.elapsed().as_secs_f64())
+            },
+        );
+        self.search_s += pending_s;
+        for (i, d) in mollified {
+            terms[i].mollified = Some(d);
+        }
         if pot.is_finite() {
-            // By reference: a derivative is 1.3 KB, and moving each out of the list cost
-            // more than adding it.
-            let mut derivatives = std::mem::take(&mut self.derivatives);
-            // The same terms again (see above): their exact derivatives, when kept, again.
-            if !(again && self.derivatives_exact) {
-                self.barrier_derivatives(&terms, &x, &mut derivatives);
-            }
             self.derivatives_exact = !self.project;
             if self.project {
                 derivatives.par_iter_mut().for_each(Derivative::project_hessian);
@@ -474,10 +513,10 @@ impl NodalForces for SurfaceContact {
                     blocks.add_derivative(d, f_ext, true);
                 }
             }
-            self.derivatives = derivatives;
         } else {
             self.derivatives_exact = false;
         }
+        self.derivatives = derivatives;
         for ft in &fr {
             pot += ft.energy;
             blocks.add_weighted(&ft.nodes, &ft.weights, &ft.g, ft.k.as_ref(), f_ext);
@@ -673,6 +712,7 @@ impl NodalForces for SurfaceContact {
                 Friction { nodes: term.nodes, weights, normal: term.normal, force: term.force, anchor, delta: self.settings.friction_slip * term.dhat, sliding, slip },
             );
         }
+        self.committed = super::friction::committed(&self.friction);
         stiffen.sort_unstable();
         stiffen.dedup();
         for a in stiffen {

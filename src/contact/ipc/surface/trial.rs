@@ -12,8 +12,7 @@ use nalgebra::Vector3;
 use rayon::prelude::*;
 
 use super::super::friction::FrictionTerm;
-use super::super::potential::{mollified_derivative, Scalar};
-use super::pairs::parallel_mollifier;
+use super::super::potential::{mollified_derivative, Derivative, Scalar};
 use super::{Pair, SurfaceContact, Term};
 use crate::contact::barrier::barrier;
 use crate::model::{Model, State};
@@ -60,23 +59,28 @@ impl SurfaceContact {
         pot
     }
 
-    /// The kept trial when `state` is bit for bit its state and `pairs` its candidates, with
-    /// the mollified edge–edge pairs' derivatives added to its terms (what
-    /// `evaluate_pairs` with derivatives computes); None otherwise. The kept trial is
-    /// forgotten either way.
-    pub(super) fn take_trial(&mut self, state: &State, pairs: &Arc<Vec<Pair>>, x: &(dyn Fn(usize) -> Vector3<f64> + Sync)) -> Option<Trial> {
+    /// The kept trial when `state` is bit for bit its state and `pairs` its candidates; None
+    /// otherwise. The kept trial is forgotten either way. Its mollified edge–edge pairs still
+    /// lack their derivatives ([`SurfaceContact::trial_mollified`]).
+    pub(super) fn take_trial(&mut self, state: &State, pairs: &Arc<Vec<Pair>>) -> Option<Trial> {
         let same = |a: &Vector3<f64>, b: &Vector3<f64>| a.iter().zip(b.iter()).all(|(p, q)| p.to_bits() == q.to_bits());
-        let mut trial = self.trial.take().filter(|t| Arc::ptr_eq(&t.pairs, pairs) && t.u.len() == self.points.len() && self.points.iter().zip(&t.u).all(|(&a, u)| same(&state.u[a], u)))?;
-        trial.terms.par_iter_mut().filter(|t| t.energy.is_finite() && t.gap > 0.0).for_each(|term| {
-            let xs = term.nodes.map(x);
-            if parallel_mollifier(term.kind, &xs, term.eps).is_some() {
+        self.trial.take().filter(|t| Arc::ptr_eq(&t.pairs, pairs) && t.u.len() == self.points.len() && self.points.iter().zip(&t.u).all(|(&a, u)| same(&state.u[a], u)))
+    }
+
+    /// The derivatives of a kept trial's mollified edge–edge pairs among `terms` at `x`, by
+    /// index (what `evaluate_pairs` with derivatives computes for them).
+    pub(super) fn trial_mollified(&self, terms: &[Term], x: &(dyn Fn(usize) -> Vector3<f64> + Sync)) -> Vec<(usize, Box<Derivative>)> {
+        terms
+            .par_iter()
+            .enumerate()
+            .filter(|(_, t)| t.parallel && t.energy.is_finite() && t.gap > 0.0)
+            .map(|(i, term)| {
                 let kap = term.nodes.iter().map(|&a| self.kappa[a]).sum::<f64>() / 4.0;
                 let (b, b1, b2) = barrier(term.gap, term.dhat);
                 let f = Scalar { e: kap * b, e1: kap * b1, e2: kap * b2 };
-                term.mollified = Some(Box::new(mollified_derivative(&term.nodes, &term.feature, &f, term.eps, x)));
-            }
-        });
-        Some(trial)
+                (i, Box::new(mollified_derivative(&term.nodes, &term.feature, &f, term.eps, x)))
+            })
+            .collect()
     }
 
     /// Forgets the kept trial (κ or the friction anchors changed).
