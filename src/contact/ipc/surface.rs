@@ -169,8 +169,9 @@ struct Term {
 enum Pending {
     /// Nothing: the last evaluation's terms again.
     Nothing,
-    /// The derivatives of the mollified pairs of a kept trial ([`SurfaceContact::trial_mollified`]).
-    Mollified,
+    /// The derivatives of the mollified pairs of a kept trial ([`SurfaceContact::trial_mollified`])
+    /// and the friction terms (the trial measured their potentials alone).
+    Trial,
     /// The friction terms.
     Friction,
 }
@@ -444,7 +445,7 @@ impl NodalForces for SurfaceContact {
                 // A trial state of the line search, measured by `potential_at`.
                 Some(trial) => {
                     self.start_gaps = Some((candidates, trial.gaps));
-                    (trial.terms, trial.friction, Pending::Mollified)
+                    (trial.terms, Vec::new(), Pending::Trial)
                 }
                 None => {
                     let mut gaps = self.start_gaps.take().map(|g| g.1).unwrap_or_default();
@@ -486,7 +487,7 @@ impl NodalForces for SurfaceContact {
                 let t = Instant::now();
                 let (m, f) = match pending {
                     Pending::Nothing => (Vec::new(), fr),
-                    Pending::Mollified => (self.trial_mollified(&terms, &x), fr),
+                    Pending::Trial => (self.trial_mollified(&terms, &x), self.friction_terms(&x, true)),
                     Pending::Friction => (Vec::new(), self.friction_terms(&x, true)),
                 };
                 (m, f, t.elapsed().as_secs_f64())

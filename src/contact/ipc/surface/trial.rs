@@ -1,9 +1,11 @@
 //! The energy line search's trial states (see the parent module doc): a trial after the
 //! first is judged by its potential alone (`NodalForces::potential_at`), and the one it
 //! accepts is then assembled in full at the very same state. The trial's measured pairs
-//! (closest features, gaps, energies, normals, weights) and friction terms are kept for that
-//! assembly, which then only differentiates them: on the NBC sleeve on the arm 274 of the
-//! 1014 evaluations with derivatives are such accepted trials.
+//! (closest features, gaps, energies, normals, weights) are kept for that assembly, which
+//! then only differentiates them: on the NBC sleeve on the arm 460 of the 813 evaluations
+//! with derivatives are such accepted trials. The trial sums the friction potentials alone;
+//! the accepted one's assembly forms the friction terms (gradients, Hessians) alongside the
+//! per-feature grouping (`add_coupled`).
 
 use std::sync::Arc;
 use std::time::Instant;
@@ -11,7 +13,6 @@ use std::time::Instant;
 use nalgebra::Vector3;
 use rayon::prelude::*;
 
-use super::super::friction::FrictionTerm;
 use super::super::potential::{mollified_derivative, Derivative, Scalar};
 use super::{Pair, SurfaceContact, Term};
 use crate::contact::barrier::barrier;
@@ -25,15 +26,14 @@ pub(super) struct Trial {
     pub(super) pairs: Arc<Vec<Pair>>,
     pub(super) gaps: Vec<(f64, bool)>,
     pub(super) terms: Vec<Term>,
-    /// Friction terms, with their Hessians.
-    pub(super) friction: Vec<FrictionTerm>,
 }
 
 impl SurfaceContact {
     /// The barrier and friction energies at `state` summed as `add_coupled` sums them (the
     /// same value, bit for bit: the same terms in the same order), without the barrier's
-    /// gradients and Hessians; infinite at a pair through zero gap. The pairs and friction
-    /// terms are kept for an assembly of this state ([`SurfaceContact::take_trial`]).
+    /// gradients and Hessians, and the friction potentials alone ([`friction::energies`](super::super::friction::energies));
+    /// infinite at a pair through zero gap. The pairs are kept for an assembly of this state
+    /// ([`SurfaceContact::take_trial`]).
     pub(super) fn trial_potential(&mut self, model: &Model, state: &State) -> f64 {
         let t = Instant::now();
         let x = |a: usize| model.x0[a] + state.u[a];
@@ -41,7 +41,8 @@ impl SurfaceContact {
         let skip = self.inactive_by_bound(&pairs, &x);
         let mut gaps = Vec::new();
         let terms = self.evaluate_pairs(&pairs, &x, false, skip.as_deref(), Some(&mut gaps));
-        let friction = self.friction_terms(&x, true);
+        // The friction potentials alone: an accepted trial's assembly forms the terms.
+        let friction = super::super::friction::energies(&self.committed, self.settings.friction, &x);
         self.search_s += t.elapsed().as_secs_f64();
         let mut pot = 0.0;
         for term in &terms {
@@ -51,11 +52,11 @@ impl SurfaceContact {
             }
             pot += term.energy;
         }
-        for ft in &friction {
-            pot += ft.energy;
+        for e in &friction {
+            pot += e;
         }
         let u = self.points.iter().map(|&a| state.u[a]).collect();
-        self.trial = Some(Trial { u, pairs, gaps, terms, friction });
+        self.trial = Some(Trial { u, pairs, gaps, terms });
         pot
     }
 
