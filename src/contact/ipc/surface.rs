@@ -427,7 +427,8 @@ impl NodalForces for SurfaceContact {
 
     fn add_coupled(&mut self, model: &Model, state: &State, f_ext: &mut [f64], jacobian: &mut Vec<(usize, Matrix3<f64>)>, pairs: &mut Vec<(usize, usize, Matrix3<f64>)>) {
         let t = Instant::now();
-        let x = |a: usize| model.x0[a] + state.u[a];
+        let pos = positions(model, state);
+        let x = |a: usize| pos[a];
         let same = |a: &Vector3<f64>, b: &Vector3<f64>| a.iter().zip(b.iter()).all(|(p, q)| p.to_bits() == q.to_bits());
         let again = self.last_u.len() == self.points.len() && self.points.iter().zip(&self.last_u).all(|(&a, u)| same(&state.u[a], u));
         // What the terms still lack: the derivatives of a kept trial's mollified pairs, or
@@ -474,13 +475,24 @@ impl NodalForces for SurfaceContact {
         let mut derivatives = std::mem::take(&mut self.derivatives);
         // The same terms again (see above): their exact derivatives, when kept, again.
         let derive = pot.is_finite() && !(again && self.derivatives_exact);
-        // The per-feature derivatives (whose grouping is a serial sort) alongside what the
-        // terms still lack (parallel), so that the sort does not leave a thread idle; the
-        // same values as one after the other.
+        let finite = pot.is_finite();
+        let project = self.project;
+        // The per-feature derivatives and their blocks (the grouping is a serial sort, the
+        // blocks go into one map in order) alongside what the terms still lack (parallel),
+        // so that the serial parts do not leave a thread idle; the same values, summed in
+        // the same order, as one after the other.
         let (_, (mollified, fr, pending_s)) = rayon::join(
             || {
                 if derive {
                     self.barrier_derivatives(&terms, &x, &mut derivatives);
+                }
+                if finite {
+                    if project {
+                        derivatives.par_iter_mut().for_each(Derivative::project_hessian);
+                    }
+                    for d in derivatives.iter() {
+                        blocks.add_derivative(d, f_ext, true);
+                    }
                 }
             },
             || {
@@ -497,16 +509,10 @@ impl NodalForces for SurfaceContact {
         for (i, d) in mollified {
             terms[i].mollified = Some(d);
         }
-        if pot.is_finite() {
-            self.derivatives_exact = !self.project;
-            if self.project {
-                derivatives.par_iter_mut().for_each(Derivative::project_hessian);
-            }
-            for d in derivatives.iter() {
-                blocks.add_derivative(d, f_ext, true);
-            }
+        if finite {
+            self.derivatives_exact = !project;
             for d in terms.iter().filter_map(|t| t.mollified.as_deref()) {
-                if self.project {
+                if project {
                     let mut d = d.clone();
                     d.project_hessian();
                     blocks.add_derivative(&d, f_ext, true);
@@ -570,8 +576,9 @@ impl NodalForces for SurfaceContact {
     /// repeatedly; the smallest fraction over all candidate pairs of the sweep is the bound.
     fn max_step(&self, model: &Model, from: &State, to: &State) -> f64 {
         let t = Instant::now();
-        let x0 = |a: usize| model.x0[a] + from.u[a];
-        let x1 = |a: usize| model.x0[a] + to.u[a];
+        let (p0, p1) = (positions(model, from), positions(model, to));
+        let x0 = |a: usize| p0[a];
+        let x1 = |a: usize| p1[a];
         let lo: Vec<Vector3<f64>> = self.points.iter().map(|&a| x0(a).inf(&x1(a))).collect();
         let hi: Vec<Vector3<f64>> = self.points.iter().map(|&a| x0(a).sup(&x1(a))).collect();
         let pairs = Arc::new(self.sweep_pairs(&x0, &x1, &lo, &hi));
@@ -816,6 +823,13 @@ impl NodalForces for SurfaceContact {
     fn couplings(&self, _model: &Model) -> Vec<(usize, usize)> {
         Vec::new()
     }
+}
+
+/// The nodes' positions x = X + u at `state`, formed once per evaluation: the pairs, friction
+/// terms and derivatives read each node's position many times (the same sums as forming
+/// X + u at each read).
+fn positions(model: &Model, state: &State) -> Vec<Vector3<f64>> {
+    model.x0.iter().zip(&state.u).map(|(x, u)| x + u).collect()
 }
 
 /// Surface contact of `setup` as a term of `solver`; refuses a start where a pair is

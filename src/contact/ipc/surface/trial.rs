@@ -36,7 +36,8 @@ impl SurfaceContact {
     /// ([`SurfaceContact::take_trial`]).
     pub(super) fn trial_potential(&mut self, model: &Model, state: &State) -> f64 {
         let t = Instant::now();
-        let x = |a: usize| model.x0[a] + state.u[a];
+        let pos = super::positions(model, state);
+        let x = |a: usize| pos[a];
         let pairs = self.candidates_at(&x);
         let skip = self.inactive_by_bound(&pairs, &x);
         let mut gaps = Vec::new();
