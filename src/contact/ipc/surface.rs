@@ -58,14 +58,13 @@ use super::friction::{Friction, FrictionTerm};
 use super::potential::{derivative_into, group, Blocks, Derivative, FeatureKey, FxMap, Scalar};
 pub use super::report::{SurfaceIncrement, SurfaceTimings};
 pub use super::settings::{SurfaceSettings, SurfaceSetup};
-use super::primitives::squared_distance_value;
-use crate::contact::ccd::conservative_advancement;
 use crate::element::NODE_DOFS;
 use crate::model::{Model, State};
 use crate::solver::NodalForces;
 
 mod candidates;
 mod pairs;
+mod sweep;
 mod trial;
 
 /// Initial κ_a d̂_a / w_a (as for rigid bodies).
@@ -149,6 +148,9 @@ struct Term {
     /// Gradient and Hessian in all four nodes of a pair with the edge–edge mollifier (it
     /// depends on more than the distance), when derivatives were asked for.
     mollified: Option<Box<Derivative>>,
+    /// A nearly parallel edge–edge pair inside the mollifier's range, differentiated on its
+    /// own (`mollified`), not with its feature.
+    parallel: bool,
     gap: f64,
     dhat: f64,
     /// Mollifier threshold (edge–edge), 0 for point–triangle.
@@ -160,6 +162,17 @@ struct Term {
     force: f64,
     normal: Vector3<f64>,
     weights: [f64; 4],
+}
+
+/// What an evaluation's terms still lack once its pairs are measured (`add_coupled`).
+enum Pending {
+    /// Nothing: the last evaluation's terms again.
+    Nothing,
+    /// The derivatives of the mollified pairs of a kept trial ([`SurfaceContact::trial_mollified`])
+    /// and the friction terms (the trial measured their potentials alone).
+    Trial,
+    /// The friction terms.
+    Friction,
 }
 
 /// Barrier contact between shell surfaces (a [`NodalForces`] term).
@@ -197,6 +210,8 @@ pub struct SurfaceContact {
     /// The broad phase's trees, refitted from search to search.
     trees: Mutex<Trees>,
     friction: FxMap<(Kind, usize, usize), Friction>,
+    /// The pairs of `friction` with a normal force, in its order (`friction::committed`).
+    committed: Vec<((Kind, usize, usize), Friction)>,
     /// Reference constants per candidate pair (None: excluded), filled as pairs come near.
     constants: RwLock<FxMap<(Kind, usize, usize), Option<Constants>>>,
     last: Vec<Term>,
@@ -347,6 +362,7 @@ impl SurfaceContact {
             near: Mutex::new(None),
             trees: Mutex::new(Trees::default()),
             friction: FxMap::default(),
+            committed: Vec::new(),
             constants: RwLock::new(FxMap::default()),
             last: Vec::new(),
             last_friction: Vec::new(),
@@ -377,7 +393,7 @@ impl SurfaceContact {
     /// written in place: a derivative is 1.3 KB, and building, zeroing and moving each one
     /// cost more than its arithmetic); the mollified pairs' are those of their terms.
     fn barrier_derivatives(&self, terms: &[Term], x: &(dyn Fn(usize) -> Vector3<f64> + Sync), out: &mut Vec<Derivative>) {
-        let grouped = group(terms.iter().filter(|t| t.mollified.is_none() && t.energy.is_finite()).map(|t| (t.feature, t.scalar)));
+        let grouped = group(terms.iter().filter(|t| !t.parallel && t.energy.is_finite()).map(|t| (t.feature, t.scalar)));
         if out.len() < grouped.len() {
             out.resize(grouped.len(), Derivative::zero());
         }
@@ -387,7 +403,7 @@ impl SurfaceContact {
 
     /// Friction potentials of the committed pairs at `x`.
     fn friction_terms(&self, x: &(dyn Fn(usize) -> Vector3<f64> + Sync), hessian: bool) -> Vec<FrictionTerm> {
-        super::friction::terms(&self.friction, self.settings.friction, x, hessian)
+        super::friction::terms(&self.committed, self.settings.friction, x, hessian)
     }
 
     /// Pairs closer than zero gap at `state` (start intersecting): (nodes, gap).
@@ -410,23 +426,26 @@ impl NodalForces for SurfaceContact {
 
     fn add_coupled(&mut self, model: &Model, state: &State, f_ext: &mut [f64], jacobian: &mut Vec<(usize, Matrix3<f64>)>, pairs: &mut Vec<(usize, usize, Matrix3<f64>)>) {
         let t = Instant::now();
-        let x = |a: usize| model.x0[a] + state.u[a];
+        let pos = positions(model, state);
+        let x = |a: usize| pos[a];
         let same = |a: &Vector3<f64>, b: &Vector3<f64>| a.iter().zip(b.iter()).all(|(p, q)| p.to_bits() == q.to_bits());
         let again = self.last_u.len() == self.points.len() && self.points.iter().zip(&self.last_u).all(|(&a, u)| same(&state.u[a], u));
-        let (terms, fr) = if again {
+        // What the terms still lack: the derivatives of a kept trial's mollified pairs, or
+        // the friction terms of a state measured here.
+        let (mut terms, fr, pending) = if again {
             // The state of the last evaluation again, with κ and the friction anchors as they
             // were (a commit clears `last_u`): the tangent projected onto the PSD cone
             // (`project_hessians`, 351 of the 5 cm NBC hood's 1525 iterations). Its pairs and
             // friction terms do not depend on the projection; only their derivatives are
             // formed again.
-            (std::mem::take(&mut self.last), std::mem::take(&mut self.last_friction))
+            (std::mem::take(&mut self.last), std::mem::take(&mut self.last_friction), Pending::Nothing)
         } else {
             let candidates = self.candidates_at(&x);
-            match self.take_trial(state, &candidates, &x) {
+            match self.take_trial(state, &candidates) {
                 // A trial state of the line search, measured by `potential_at`.
                 Some(trial) => {
                     self.start_gaps = Some((candidates, trial.gaps));
-                    (trial.terms, trial.friction)
+                    (trial.terms, Vec::new(), Pending::Trial)
                 }
                 None => {
                     let mut gaps = self.start_gaps.take().map(|g| g.1).unwrap_or_default();
@@ -434,7 +453,7 @@ impl NodalForces for SurfaceContact {
                     let terms = self.evaluate_pairs(&candidates, &x, true, skip.as_deref(), Some(&mut gaps));
                     // Kept for the collision detection of the step from this state (`max_step`).
                     self.start_gaps = Some((candidates, gaps));
-                    (terms, self.friction_terms(&x, true))
+                    (terms, Vec::new(), Pending::Friction)
                 }
             }
         };
@@ -450,23 +469,49 @@ impl NodalForces for SurfaceContact {
             }
             pot += term.energy;
         }
-        if pot.is_finite() {
-            // By reference: a derivative is 1.3 KB, and moving each out of the list cost
-            // more than adding it.
-            let mut derivatives = std::mem::take(&mut self.derivatives);
-            // The same terms again (see above): their exact derivatives, when kept, again.
-            if !(again && self.derivatives_exact) {
-                self.barrier_derivatives(&terms, &x, &mut derivatives);
-            }
-            self.derivatives_exact = !self.project;
-            if self.project {
-                derivatives.par_iter_mut().for_each(Derivative::project_hessian);
-            }
-            for d in derivatives.iter() {
-                blocks.add_derivative(d, f_ext, true);
-            }
+        // By reference: a derivative is 1.3 KB, and moving each out of the list cost more
+        // than adding it.
+        let mut derivatives = std::mem::take(&mut self.derivatives);
+        // The same terms again (see above): their exact derivatives, when kept, again.
+        let derive = pot.is_finite() && !(again && self.derivatives_exact);
+        let finite = pot.is_finite();
+        let project = self.project;
+        // The per-feature derivatives and their blocks (the grouping is a serial sort, the
+        // blocks go into one map in order) alongside what the terms still lack (parallel),
+        // so that the serial parts do not leave a thread idle; the same values, summed in
+        // the same order, as one after the other.
+        let (_, (mollified, fr, pending_s)) = rayon::join(
+            || {
+                if derive {
+                    self.barrier_derivatives(&terms, &x, &mut derivatives);
+                }
+                if finite {
+                    if project {
+                        derivatives.par_iter_mut().for_each(Derivative::project_hessian);
+                    }
+                    for d in derivatives.iter() {
+                        blocks.add_derivative(d, f_ext, true);
+                    }
+                }
+            },
+            || {
+                let t = Instant::now();
+                let (m, f) = match pending {
+                    Pending::Nothing => (Vec::new(), fr),
+                    Pending::Trial => (self.trial_mollified(&terms, &x), self.friction_terms(&x, true)),
+                    Pending::Friction => (Vec::new(), self.friction_terms(&x, true)),
+                };
+                (m, f, t.elapsed().as_secs_f64())
+            },
+        );
+        self.search_s += pending_s;
+        for (i, d) in mollified {
+            terms[i].mollified = Some(d);
+        }
+        if finite {
+            self.derivatives_exact = !project;
             for d in terms.iter().filter_map(|t| t.mollified.as_deref()) {
-                if self.project {
+                if project {
                     let mut d = d.clone();
                     d.project_hessian();
                     blocks.add_derivative(&d, f_ext, true);
@@ -474,10 +519,10 @@ impl NodalForces for SurfaceContact {
                     blocks.add_derivative(d, f_ext, true);
                 }
             }
-            self.derivatives = derivatives;
         } else {
             self.derivatives_exact = false;
         }
+        self.derivatives = derivatives;
         for ft in &fr {
             pot += ft.energy;
             blocks.add_weighted(&ft.nodes, &ft.weights, &ft.g, ft.k.as_ref(), f_ext);
@@ -529,65 +574,7 @@ impl NodalForces for SurfaceContact {
     /// move per unit of the step, so from a gap g it may advance by (g − g_min)/ℓ, g_min = (1 − CCD_CLOSE) g₀,
     /// repeatedly; the smallest fraction over all candidate pairs of the sweep is the bound.
     fn max_step(&self, model: &Model, from: &State, to: &State) -> f64 {
-        let t = Instant::now();
-        let x0 = |a: usize| model.x0[a] + from.u[a];
-        let x1 = |a: usize| model.x0[a] + to.u[a];
-        let lo: Vec<Vector3<f64>> = self.points.iter().map(|&a| x0(a).inf(&x1(a))).collect();
-        let hi: Vec<Vector3<f64>> = self.points.iter().map(|&a| x0(a).sup(&x1(a))).collect();
-        let pairs = Arc::new(self.sweep_pairs(&x0, &x1, &lo, &hi));
-        // The gaps at `from` the last Newton evaluation found (the same values gap_at(0)
-        // computes: the same operations on the same positions).
-        let start = self.gaps_at_start(&pairs, from);
-        let mut outcome: Vec<(f64, f64)> = Vec::new();
-        pairs
-            .par_iter()
-            .zip(&start)
-            .map(|(&(kind, _, nodes, c), &(g0, measured))| {
-                let a = nodes.map(x0);
-                let d: [Vector3<f64>; 4] = std::array::from_fn(|k| x1(nodes[k]) - a[k]);
-                // The distance does not change when all four nodes move alike: bound the rate
-                // by the moves relative to their mean (additive CCD, Li, Kaufman & Jiang 2021,
-                // §4), so that plies moving together advance in one step.
-                let mean = (d[0] + d[1] + d[2] + d[3]) * 0.25;
-                let r: [f64; 4] = std::array::from_fn(|k| (d[k] - mean).norm());
-                let (m1, m2) = match kind {
-                    Kind::PointTriangle => (r[0], r[1].max(r[2]).max(r[3])),
-                    Kind::EdgeEdge => (r[0].max(r[1]), r[2].max(r[3])),
-                };
-                let gap_at = |s: f64| {
-                    let xs: [Vector3<f64>; 4] = std::array::from_fn(|k| a[k] + d[k] * s);
-                    let (feat, _) = Self::feature(kind, &xs);
-                    squared_distance_value(feat, &xs).sqrt() - c.offset
-                };
-                if m1 + m2 == 0.0 {
-                    return (1.0, g0);
-                }
-                let rate = m1 + m2;
-                if !measured && CCD_CLOSE * g0 >= rate * (1.0 + 1e-9) {
-                    // The gap is at least g0 (`StartGaps`): advancement takes the whole step
-                    // at once, as it would from the gap itself.
-                    return (1.0, g0);
-                }
-                let g0 = if !measured || !d.iter().all(|v| v.iter().all(|c| c.is_finite())) { gap_at(0.0) } else { g0 };
-                (conservative_advancement(g0, rate, CCD_CLOSE, 100, |s| Some(gap_at(s))), g0)
-            })
-            .collect_into_vec(&mut outcome);
-        let s = outcome.iter().map(|o| o.0).fold(1.0, f64::min);
-        if let Ok(mut st) = self.start.lock() {
-            let gaps = outcome.iter().map(|o| o.1).collect();
-            *st = Some(StartGaps { pairs: pairs.clone(), gaps, from: self.points.iter().map(|&a| x0(a)).collect() });
-        }
-        if let Ok(mut sw) = self.sweep.lock() {
-            *sw = Some(Sweep::new(lo, hi, pairs));
-        }
-        if let Ok(mut tm) = self.timings.lock() {
-            tm.ccd += t.elapsed().as_secs_f64();
-            tm.ccd_calls += 1;
-            if s < 1.0 {
-                tm.ccd_limited += 1;
-            }
-        }
-        s
+        self.collision_free_fraction(model, from, to)
     }
 
     /// Reports the converged `state`, moves the friction anchors of sliding pairs (return
@@ -673,6 +660,7 @@ impl NodalForces for SurfaceContact {
                 Friction { nodes: term.nodes, weights, normal: term.normal, force: term.force, anchor, delta: self.settings.friction_slip * term.dhat, sliding, slip },
             );
         }
+        self.committed = super::friction::committed(&self.friction);
         stiffen.sort_unstable();
         stiffen.dedup();
         for a in stiffen {
@@ -775,6 +763,13 @@ impl NodalForces for SurfaceContact {
     fn couplings(&self, _model: &Model) -> Vec<(usize, usize)> {
         Vec::new()
     }
+}
+
+/// The nodes' positions x = X + u at `state`, formed once per evaluation: the pairs, friction
+/// terms and derivatives read each node's position many times (the same sums as forming
+/// X + u at each read).
+fn positions(model: &Model, state: &State) -> Vec<Vector3<f64>> {
+    model.x0.iter().zip(&state.u).map(|(x, u)| x + u).collect()
 }
 
 /// Surface contact of `setup` as a term of `solver`; refuses a start where a pair is

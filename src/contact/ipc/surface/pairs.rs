@@ -114,7 +114,7 @@ impl SurfaceContact {
             let thin = 2.0 * nodes.iter().map(|&a| self.half[a]).fold(f64::INFINITY, f64::min);
             let feature = FeatureKey::of(feat, &nodes);
             let inf = Scalar { e: f64::INFINITY, e1: 0.0, e2: 0.0 };
-            let mut term = Term { kind, key, nodes, feature, scalar: inf, mollified: None, gap, dhat: c.dhat, eps: c.eps, thin, energy: f64::INFINITY, force: f64::INFINITY, normal, weights };
+            let mut term = Term { kind, key, nodes, feature, scalar: inf, mollified: None, parallel: false, gap, dhat: c.dhat, eps: c.eps, thin, energy: f64::INFINITY, force: f64::INFINITY, normal, weights };
             if gap <= 0.0 {
                 return Some(term);
             }
@@ -128,6 +128,7 @@ impl SurfaceContact {
             // stopped at a residual of 10⁻⁶ with a projected or Gauss–Newton tangent; it
             // converges with the exact one).
             let mollified = parallel_mollifier(kind, &xs, c.eps);
+            term.parallel = mollified.is_some();
             if mollified.is_some() && derivatives {
                 let f = Scalar { e: kap * b, e1: kap * b1, e2: kap * b2 };
                 term.mollified = Some(Box::new(mollified_derivative(&nodes, &feature, &f, c.eps, x)));
