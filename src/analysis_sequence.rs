@@ -92,6 +92,7 @@ fn level_record(sc: &Scene, s: &Summary, mapping: Option<serde_json::Value>) -> 
         "newton_iterations": s.newton_iterations,
         "line_search_cuts": s.timings.line_search_cuts,
         "projected_iterations": s.timings.projected_iterations,
+        "factorizations": s.timings.factorizations,
         "assembly_s": s.timings.assembly,
         "factorization_s": s.timings.factorization,
         "solve_s": s.timings.solve,

@@ -110,6 +110,10 @@ pub struct Timings {
     /// Hessians projected to PSD (`time_step`).
     #[serde(default)]
     pub projected_iterations: usize,
+    /// Numeric factorizations of the time steps' effective tangents (`time_step`): one per
+    /// Newton iteration, and more where an indefinite one is shifted or projected.
+    #[serde(default)]
+    pub factorizations: usize,
 }
 
 impl SolveError {
