@@ -19,6 +19,16 @@ const STRIP: &str = r#"Scene(
     output: (vtu: false),
 )"#;
 
+/// A temporary directory `plyshell_study_<label>_<pid>` holding the strip scene as
+/// `strip.ron`; returns the directory and the scene's path.
+fn strip_scene(label: &str) -> (std::path::PathBuf, std::path::PathBuf) {
+    let dir = std::env::temp_dir().join(format!("plyshell_study_{label}_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let path = dir.join("strip.ron");
+    std::fs::write(&path, STRIP).expect("scene written");
+    (dir, path)
+}
+
 #[test]
 fn study_of_a_two_ply_flap_writes_a_table_with_a_zero_error_reference() {
     let out = std::env::temp_dir().join(format!("plyshell_study_{}", std::process::id()));
@@ -57,11 +67,7 @@ fn study_of_a_two_ply_flap_writes_a_table_with_a_zero_error_reference() {
 /// clamped at one end, sagging under its weight (a Peirce cantilever), static.
 #[test]
 fn study_of_a_sized_part_varies_its_element_size() {
-    let text = STRIP;
-    let dir = std::env::temp_dir().join(format!("plyshell_study_part_{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("temp dir");
-    let path = dir.join("strip.ron");
-    std::fs::write(&path, text).expect("scene written");
+    let (dir, path) = strip_scene("part");
     let out = dir.join("out");
     let options = StudyOptions { sizes: vec![4.0, 1.0], tolerances: vec![0.05], ply_models: vec![PlyModel::Laminate, PlyModel::Discrete], refine: vec![], out: out.clone(), vtu: false };
     let rows = run_study(&path, &options, &mut |m| println!("{m}")).unwrap_or_else(|e| panic!("{e}"));
@@ -91,11 +97,7 @@ fn study_of_a_sized_part_varies_its_element_size() {
 /// against 1000), and its Newton count is both passes'.
 #[test]
 fn study_refines_a_coarse_level_a_posteriori() {
-    let text = STRIP;
-    let dir = std::env::temp_dir().join(format!("plyshell_study_refine_{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("temp dir");
-    let path = dir.join("strip.ron");
-    std::fs::write(&path, text).expect("scene written");
+    let (dir, path) = strip_scene("refine");
     let options = StudyOptions { sizes: vec![2.0, 0.5], tolerances: vec![], ply_models: vec![PlyModel::Discrete], refine: vec![0.002], out: dir.join("out"), vtu: false };
     let rows = run_study(&path, &options, &mut |m| println!("{m}")).unwrap_or_else(|e| panic!("{e}"));
     println!("{}", plyshell::study::markdown("strip", &rows));
