@@ -135,6 +135,12 @@ FINE = [(sys.argv[i + 1], float(sys.argv[i + 2])) for i, a in enumerate(sys.argv
 if FINE_UNDERARM:
     FINE = [("sleeve_under_upper_", FINE_UNDERARM), ("gusset_", FINE_UNDERARM)] + FINE
 SIDE_BACK = float(sys.argv[sys.argv.index("--side-back") + 1]) if "--side-back" in sys.argv else 0.0
+# Sub-element buckling (--compression F, off in garments/nbc_suit.ron): every ply's fabric gets
+# compression_table [(0, 1), (0.001, F)], its membrane stiffness under compression scaled to F
+# past 0.1 % compressive strain (README "Fabric, contact and drape"). The 0.1 m suit's elements
+# are larger than the laminate's bending length (61.5 mm): fabric bunched between chest and arm
+# in the arms-forward pose has to fold inside one element without it.
+COMPRESSION = float(sys.argv[sys.argv.index("--compression") + 1]) if "--compression" in sys.argv else 0.0
 # Reach ease across the back (--back-ease E, 0 in garments/nbc_suit.ron): each back quarter's
 # centre back bulges out by E between the waist and the neck (flat at E over the shoulder
 # blades, V_BLADE), so the back is 2E wider across the blades than the body's quarters while
@@ -492,15 +498,18 @@ def ron(element_size, discrete, protocol=None, name="nbc_suit", body="body"):
         w(f"// Seat ease: the back rise {f(SEAT_EASE)} m longer at the centre back, a seat wedge (--seat-ease).")
     if BACK_EASE:
         w(f"// Reach ease: each back quarter {f(BACK_EASE)} m wider across the shoulder blades (--back-ease).")
+    if COMPRESSION:
+        w(f"// Sub-element buckling: each ply's membrane stiffness under compression scaled to {COMPRESSION} past 0.1 % strain (--compression).")
     w(f"// Element size {element_size} m (coarse).")
     w("Scene(")
     w(f'    name: "{name}",')
     w(f'    description: "NBC coverall with hood: {len(panels)} panels, {len(seams)} seams, 3 plies; placed round the mannequin, sewn, draped to rest",')
     w("    materials: {")
-    w('        "ripstop": Fabric((preset: Some("ripstop"))),')
+    ct = f", compression_table: Some([(0.0, 1.0), (0.001, {COMPRESSION})])" if COMPRESSION else ""
+    w(f'        "ripstop": Fabric((preset: Some("ripstop"){ct})),')
     w('        "carbon_layer": Fabric((warp_tensile: Some(1500.0), weft_tensile: Some(1200.0), shear: Some(5.0), poisson: Some(0.2),')
-    w("                                warp_bending: Some(2.0e-5), weft_bending: Some(1.6e-5), areal_density: Some(0.25), thickness: Some(0.0015))),")
-    w('        "liner": Fabric((preset: Some("knit_liner"))),')
+    w(f"                                warp_bending: Some(2.0e-5), weft_bending: Some(1.6e-5), areal_density: Some(0.25), thickness: Some(0.0015){ct})),")
+    w(f'        "liner": Fabric((preset: Some("knit_liner"){ct})),')
     w("    },")
     w("    parts: [],")
     w("    garment: Some((")
@@ -569,7 +578,7 @@ if __name__ == "__main__":
         del args[i:i + 2]
     discrete = "--discrete" in args
     args = [a for a in args if a != "--discrete"]
-    for flag in ("--side-back", "--fine-underarm", "--back-ease", "--gusset-depth", "--seat-ease"):
+    for flag in ("--side-back", "--fine-underarm", "--back-ease", "--gusset-depth", "--seat-ease", "--compression"):
         if flag in args:
             i = args.index(flag)
             del args[i:i + 2]

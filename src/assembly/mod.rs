@@ -94,9 +94,9 @@ pub struct Assembler {
     rules: Vec<Result<SectionRule, ElementFailure>>,
     /// Reference geometry of each element (built once; a degenerate element keeps its failure).
     geometry: Vec<Result<ElementGeometry, ElementFailure>>,
-    /// Director orientation barrier of each element: reference corner signs and the corner
-    /// stiffness (`element::orientation`).
-    orientation: Vec<([i8; 4], f64)>,
+    /// Director orientation and corner-collapse barriers of each element
+    /// (`element::orientation`).
+    orientation: Vec<orientation::CornerBarriers>,
     /// Entries of elements with tied DOFs that go through the constraint weights:
     /// (local entry i·20+j, slot, w_i w_j), the element's part of Tᵀ K T. Empty for
     /// elements without tied DOFs (their entries all take the direct path).
@@ -356,8 +356,10 @@ impl Assembler {
         let orientation = (0..model.elements.len())
             .map(|e| {
                 let el = model.element(e);
-                let kappa = orientation::STIFFNESS * el.section.material.bending_rigidity(el.section.thickness);
-                (orientation::reference_signs(&el.x0, &el.d0), kappa)
+                let material = &el.section.material;
+                let kappa = orientation::STIFFNESS * material.bending_rigidity(el.section.thickness);
+                let membrane = material.small_strain_moduli().0 * el.section.thickness;
+                orientation::CornerBarriers::new(&el.x0, &el.d0, kappa, membrane)
             })
             .collect();
         let constrained: Vec<bool> = model.elements.iter().map(|el| is_tied(el)).collect();
@@ -445,9 +447,8 @@ impl Assembler {
         }
         .map_err(fail)?;
         // The director orientation barrier, zero in every regular state.
-        let (signs, kappa) = &self.orientation[e];
         let current = std::array::from_fn(|a| model.x0[def.nodes[a]] + x[a]);
-        let barrier = orientation::add(&current, &frames, signs, *kappa, &mut force, k).map_err(fail)?;
+        let barrier = orientation::add(&current, &frames, &self.orientation[e], &mut force, k).map_err(fail)?;
         Ok((force, energy + barrier))
     }
 

@@ -63,6 +63,10 @@ pub struct FabricProperties {
     pub thickness: f64,
     /// Tension stiffening: (tensile strain, stiffness factor) pairs, strain ascending from 0.
     pub tension_table: Vec<(f64, f64)>,
+    /// Sub-element buckling: (compressive strain magnitude, stiffness factor) pairs, strain
+    /// ascending from 0, scaling the membrane part of the warp and weft stiffnesses under
+    /// compressive membrane strain (see the module documentation); empty: no softening.
+    pub compression_table: Vec<(f64, f64)>,
 }
 
 /// Named, representative fabric presets. Values lie in the ranges of
@@ -97,6 +101,7 @@ impl FabricProperties {
             areal_density: rho,
             thickness: h,
             tension_table: Vec::new(),
+            compression_table: Vec::new(),
         })
     }
 
@@ -138,18 +143,42 @@ impl FabricProperties {
         if !(self.poisson.is_finite() && self.poisson >= 0.0 && self.poisson * nu21 < 1.0) {
             return Err(("poisson", format!("expected 0 ≤ ν12 with ν12·ν21 < 1 (ν21 = ν12·weft/warp), found ν12 = {}", self.poisson)));
         }
-        let mut last = (0.0, 1.0);
-        for (i, &(e, f)) in self.tension_table.iter().enumerate() {
-            if !(e.is_finite() && f.is_finite() && f > 0.0) || (i == 0 && e != 0.0) || (i > 0 && e <= last.0) {
-                return Err((
-                    "tension_table",
-                    format!("entry {i} ({e}, {f}): expected strains ascending from 0 and positive factors"),
-                ));
+        for (name, table) in [("tension_table", &self.tension_table), ("compression_table", &self.compression_table)] {
+            let mut last = 0.0;
+            for (i, &(e, f)) in table.iter().enumerate() {
+                if !(e.is_finite() && f.is_finite() && f > 0.0) || (i == 0 && e != 0.0) || (i > 0 && e <= last) {
+                    return Err((name, format!("entry {i} ({e}, {f}): expected strains ascending from 0 and positive factors")));
+                }
+                last = e;
             }
-            last = (e, f);
         }
         Ok(())
     }
+}
+
+/// (f(m), ∫₀ᵐ f, ∫₀ᵐ∫₀ˢ f) for m ≥ 0 of the piecewise-linear factor f of a (strain, factor)
+/// table whose strains ascend from 0, held constant past its last entry.
+fn table_integrals(t: &[(f64, f64)], m: f64) -> (f64, f64, f64) {
+    let (mut f_int, mut ff_int) = (0.0, 0.0);
+    let mut seg = |e0: f64, f0: f64, e1: f64, f1: f64| {
+        let l = e1 - e0;
+        let k = if l > 0.0 { (f1 - f0) / l } else { 0.0 };
+        // ∫_{e0}^{e1} (F(e0) + ∫_{e0}^{s} f) ds with f = f0 + k(s − e0).
+        ff_int += f_int * l + 0.5 * f0 * l * l + k * l * l * l / 6.0;
+        f_int += f0 * l + 0.5 * k * l * l;
+    };
+    for w in t.windows(2) {
+        let ((e0, f0), (e1, f1)) = (w[0], w[1]);
+        if m <= e1 {
+            let fm = f0 + (f1 - f0) * (m - e0) / (e1 - e0);
+            seg(e0, f0, m, fm);
+            return (fm, f_int, ff_int);
+        }
+        seg(e0, f0, e1, f1);
+    }
+    let (el, fl) = t[t.len() - 1];
+    seg(el, fl, m, fl);
+    (fl, f_int, ff_int)
 }
 
 /// Largest bending-to-membrane ratio D/(A h²) for which the mid-layer stiffness
@@ -176,6 +205,10 @@ pub struct Fabric {
     beta: [[f64; 3]; 3],
     /// Transverse shear modulus T/h.
     g_transverse: f64,
+    /// 12 B_i/h³ (warp, weft): the homogeneous stiffness that alone gives the bending
+    /// rigidity B_i; the rest of C_ii(ζ) = α + β ζ² integrates to the membrane stiffness
+    /// with no second moment, and vanishes at the outer points ζ = ±√(3/5) of the 3-point rule.
+    bending_part: [f64; 2],
 }
 
 impl Fabric {
@@ -196,42 +229,28 @@ impl Fabric {
                 alpha[i][j] = 9.0 * a[i][j] / (4.0 * h) - 15.0 * d[i][j] / h.powi(3);
             }
         }
-        Self { g_transverse: props.transverse_shear / h, props, a, alpha, beta }
+        let bending_part = [12.0 * props.warp_bending / h.powi(3), 12.0 * props.weft_bending / h.powi(3)];
+        Self { g_transverse: props.transverse_shear / h, props, a, alpha, beta, bending_part }
     }
 
-    /// Tension-stiffening factor integrals at strain e: (f(e), ∫₀ᵉ f, ∫₀ᵉ∫₀ˢ f) for the
-    /// piecewise-linear table; f = 1 in compression and without a table.
+    /// Factor integrals (f(e), ∫₀ᵉ f, ∫₀ᵉ∫₀ˢ f) of a normal strain e: for e > 0 the tension
+    /// table's f, for e < 0 the compression table's f(|e|) (by symmetry ∫₀ᵉ f = −∫₀^{|e|} f and
+    /// the double integral is the same), f = 1 where the side's table is empty. Piecewise-linear
+    /// f, integrated exactly segment by segment.
     fn stiffening(&self, e: f64) -> (f64, f64, f64) {
-        let t = &self.props.tension_table;
-        if t.is_empty() || e <= 0.0 {
+        let (table, m) = if e > 0.0 { (&self.props.tension_table, e) } else { (&self.props.compression_table, -e) };
+        if table.is_empty() || e == 0.0 {
             return (1.0, e, 0.5 * e * e);
         }
-        // Integrate segment by segment: f linear on [e0, e1].
-        let (mut f_int, mut ff_int) = (0.0, 0.0);
-        let mut seg = |e0: f64, f0: f64, e1: f64, f1: f64| {
-            let l = e1 - e0;
-            let k = if l > 0.0 { (f1 - f0) / l } else { 0.0 };
-            // ∫_{e0}^{e1} (F(e0) + ∫_{e0}^{s} f) ds with f = f0 + k(s − e0).
-            ff_int += f_int * l + 0.5 * f0 * l * l + k * l * l * l / 6.0;
-            f_int += f0 * l + 0.5 * k * l * l;
-        };
-        for w in t.windows(2) {
-            let ((e0, f0), (e1, f1)) = (w[0], w[1]);
-            if e <= e1 {
-                let fe = f0 + (f1 - f0) * (e - e0) / (e1 - e0);
-                seg(e0, f0, e, fe);
-                return (fe, f_int, ff_int);
-            }
-            seg(e0, f0, e1, f1);
-        }
-        let (el, fl) = t[t.len() - 1];
-        seg(el, fl, e, fl);
-        (fl, f_int, ff_int)
+        let (f, f_int, ff_int) = table_integrals(table, m);
+        (f, f_int.copysign(e), ff_int)
     }
 
     /// Stress, tangent and energy with in-plane stiffness C (3×3) and the stiffening law
     /// applied to the normal components.
-    fn evaluate(&self, strain: &Voigt5, c: &[[f64; 3]; 3]) -> Result<PointResponse, MaterialFailure> {
+    /// `exempt[i]` is the part of C_ii that the compression table leaves unscaled (the
+    /// bending part of the through-thickness split, see `response_at`).
+    fn evaluate(&self, strain: &Voigt5, c: &[[f64; 3]; 3], exempt: [f64; 2]) -> Result<PointResponse, MaterialFailure> {
         if strain.iter().any(|v| !v.is_finite()) {
             return Err(MaterialFailure::NotFinite);
         }
@@ -241,6 +260,13 @@ impl Fabric {
         let e = [strain[0], strain[1], strain[2]];
         for i in 0..2 {
             let (f, fi, ffi) = self.stiffening(e[i]);
+            if e[i] < 0.0 && !self.props.compression_table.is_empty() {
+                let (cb, cm) = (exempt[i], c[i][i] - exempt[i]);
+                stress[i] += cb * e[i] + cm * fi;
+                tangent[(i, i)] += cb + cm * f;
+                energy += 0.5 * cb * e[i] * e[i] + cm * ffi;
+                continue;
+            }
             stress[i] += c[i][i] * fi;
             tangent[(i, i)] += c[i][i] * f;
             energy += c[i][i] * ffi;
@@ -274,7 +300,7 @@ impl ShellMaterial for Fabric {
     fn response(&self, strain: &Voigt5) -> Result<PointResponse, MaterialFailure> {
         let h = self.props.thickness;
         let c = self.a.map(|r| r.map(|v| v / h));
-        self.evaluate(strain, &c)
+        self.evaluate(strain, &c, [0.0; 2])
     }
 
     fn response_at(&self, strain: &Voigt5, zeta: f64) -> Result<PointResponse, MaterialFailure> {
@@ -285,7 +311,7 @@ impl ShellMaterial for Fabric {
                 c[i][j] = self.alpha[i][j] + self.beta[i][j] * z2;
             }
         }
-        self.evaluate(strain, &c)
+        self.evaluate(strain, &c, self.bending_part)
     }
 
     fn thickness_points(&self) -> Option<usize> {
@@ -366,5 +392,70 @@ mod tests {
             assert!((a / m.a[0][0] - 1.0).abs() < 1e-12, "{n}: {a}");
             assert!((d / m.props.warp_bending - 1.0).abs() < 1e-9, "{n}: {d}");
         }
+    }
+
+    /// The compression table's stress and tangent are the derivatives of its energy, on both
+    /// sides of the table's kink and across zero strain.
+    #[test]
+    fn tangent_and_stress_are_derivatives_with_compression_table() {
+        let mut p = props();
+        p.compression_table = vec![(0.0, 1.0), (0.001, 0.05)];
+        let m = Fabric::new(p);
+        for e in [Voigt5::new(-0.0004, -0.003, 0.01, 0.002, -0.001), Voigt5::new(0.002, -0.0007, -0.02, 0.0, 0.001)] {
+            for z in [0.0, 0.77] {
+                let (c, zeta) = (&m, z);
+                let at = |s: &Voigt5| c.response_at(s, zeta).expect("finite");
+                // Central differences of energy and stress in each strain component.
+                let r = at(&e);
+                for k in 0..5 {
+                    let step = 1e-8;
+                    let mut ep = e;
+                    let mut em = e;
+                    ep[k] += step;
+                    em[k] -= step;
+                    let (rp, rm) = (at(&ep), at(&em));
+                    let ds = (rp.energy - rm.energy) / (2.0 * step);
+                    assert!((ds - r.stress[k]).abs() <= 1e-5 * r.stress.norm().max(1.0), "z {z} k {k}: dψ {ds} vs S {}", r.stress[k]);
+                    for i in 0..5 {
+                        let dt = (rp.stress[i] - rm.stress[i]) / (2.0 * step);
+                        assert!((dt - r.tangent[(i, k)]).abs() <= 1e-5 * r.tangent.norm(), "z {z} ({i},{k}): {dt} vs {}", r.tangent[(i, k)]);
+                    }
+                }
+            }
+        }
+    }
+
+    /// Sub-element buckling scales the membrane stiffness under compression by the table's
+    /// factor and leaves the bending rigidity and the tensile response unchanged (3-point
+    /// rule: ∫C dz and ∫C z² dz of the tangent at a compressive membrane strain).
+    #[test]
+    fn compression_table_softens_membrane_not_bending() {
+        let soft = {
+            let mut p = props();
+            p.compression_table = vec![(0.0, 1.0), (0.001, 0.05)];
+            Fabric::new(p)
+        };
+        let plain = Fabric::new(props());
+        let h = plain.props.thickness;
+        let (pz, wz) = gauss_legendre(3).expect("rule");
+        // Membrane strain −0.005 along the warp plus a curvature κ whose fibre strains stay
+        // compressive: the tangent's section integrals.
+        let section = |m: &Fabric, e0: f64, kappa: f64| {
+            let (mut a, mut d) = (0.0, 0.0);
+            for (&z, &w) in pz.iter().zip(wz) {
+                let zz = 0.5 * h * z;
+                let t = m.response_at(&Voigt5::new(e0 + kappa * zz, 0.0, 0.0, 0.0, 0.0), z).expect("finite").tangent[(0, 0)];
+                a += 0.5 * h * w * t;
+                d += 0.5 * h * w * t * zz * zz;
+            }
+            (a, d)
+        };
+        let (a_soft, d_soft) = section(&soft, -0.005, 2.0);
+        let (a_plain, d_plain) = section(&plain, -0.005, 2.0);
+        let bending = 12.0 * plain.props.warp_bending / h.powi(3) * h;
+        assert!(((a_soft - bending) / (a_plain - bending) - 0.05).abs() < 1e-9, "membrane factor {}", (a_soft - bending) / (a_plain - bending));
+        assert!((d_soft / d_plain - 1.0).abs() < 1e-9, "bending {d_soft} vs {d_plain}");
+        let (a_t, d_t) = section(&soft, 0.005, 2.0);
+        assert_eq!((a_t, d_t), section(&plain, 0.005, 2.0));
     }
 }

@@ -24,6 +24,7 @@ pub fn fabric_properties(spec: &FabricSpec) -> Result<FabricProperties, (&'stati
                 areal_density: need(spec.areal_density, "areal_density")?,
                 thickness: need(spec.thickness, "thickness")?,
                 tension_table: Vec::new(),
+                compression_table: Vec::new(),
             }
         }
     };
@@ -50,6 +51,9 @@ pub fn fabric_properties(spec: &FabricSpec) -> Result<FabricProperties, (&'stati
     set(&mut p.thickness, spec.thickness);
     if let Some(t) = &spec.tension_table {
         p.tension_table = t.clone();
+    }
+    if let Some(t) = &spec.compression_table {
+        p.compression_table = t.clone();
     }
     p.validate()?;
     Ok(p)

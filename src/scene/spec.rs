@@ -158,6 +158,9 @@ pub struct FabricSpec {
     pub thickness: Option<f64>,
     /// Tension stiffening (strain, factor) table, strains ascending from 0.
     pub tension_table: Option<Vec<(f64, f64)>>,
+    /// Sub-element buckling: (compressive strain, factor) table on the membrane stiffness
+    /// under compression, strains ascending from 0.
+    pub compression_table: Option<Vec<(f64, f64)>>,
 }
 
 fn five_sixths() -> f64 {
