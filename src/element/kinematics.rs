@@ -272,3 +272,46 @@ impl Kinematics {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The lane-wise arc factors equal, bit for bit, the one-value series and closed form
+    /// (the former scalar `arc_factor`), lane by lane, whatever the other lanes hold: series
+    /// and closed-form lanes side by side, and the refused values (nearly antipodal
+    /// directors, NaN).
+    #[test]
+    fn arc_factor_lanes_equal_the_scalar_evaluation() {
+        let scalar = |w: f64| -> Option<[f64; 3]> {
+            let y = 0.25 * w;
+            if !(y < 0.999_999) || y < 0.0 {
+                return None;
+            }
+            let (h, hy, hyy) = if y < 0.02 {
+                let (mut h, mut h1, mut h2, mut y_nm1, mut y_nm2) = (1.0, 0.0, 0.0, 1.0, 0.0);
+                for [c, nc, nnc] in ARC_SERIES {
+                    h += c * y_nm1 * y;
+                    h1 += nc * y_nm1;
+                    h2 += nnc * y_nm2;
+                    y_nm2 = y_nm1;
+                    y_nm1 *= y;
+                }
+                (h, h1, h2)
+            } else {
+                let (s, r) = (y.sqrt(), (1.0 - y).sqrt());
+                let a = s.asin();
+                (a / s, 0.5 / (y * r) - 0.5 * a / (y * s), -0.75 / (y * y * r) + 0.25 / (y * r * r * r) + 0.75 * a / (y * y * s))
+            };
+            Some([h, 0.25 * hy, 0.0625 * hyy])
+        };
+        let bits = |f: Option<[f64; 3]>| f.map(|v| v.map(f64::to_bits));
+        for w in [[1e-9, 0.05, 0.0799, 3.9], [0.0801, 4.0, f64::NAN, 2.0], [0.0, 1e-3, 0.5, 0.079_999]] {
+            let lanes = arc_factors(w);
+            for (l, &wl) in w.iter().enumerate() {
+                assert_eq!(bits(lanes[l]), bits(scalar(wl)), "w = {wl}");
+                assert_eq!(bits(arc_factor(wl)), bits(scalar(wl)), "w = {wl}");
+            }
+        }
+    }
+}
