@@ -2,7 +2,8 @@
 //!
 //! `cargo run --release --example assembly_speed -- --kernel [ELEMENTS] [REPEATS]`:
 //! microseconds per element per tangent and per residual (force + energy) of the 4-node
-//! shell, on one thread (thread CPU time) and on a pool of two (wall time), for St. Venant–Kirchhoff, Ciarlet neo-Hookean and fabric laminae and the
+//! shell as the assembler calls it (`response_into`, one tangent matrix reused; with
+//! `KERNEL_BOXED=1` `response_with`, which allocates a boxed tangent per call), on one thread (thread CPU time) and on a pool of two (wall time), for St. Venant–Kirchhoff, Ciarlet neo-Hookean and fabric laminae and the
 //! three-ply fabric laminate section of the NBC suit (nine thickness levels), with
 //! MITC4, SRI and both MITC4+ variants, on a patch of distorted, warped, strongly deformed elements (median
 //! of REPEATS passes). Prints checksums of forces, energies and tangents, so that a change
@@ -130,12 +131,20 @@ fn kernel(n: usize, repeats: usize) -> Result<(), String> {
             let elements: Vec<ShellElement> = (0..n * n).map(|e| ShellElement { x0: p.x0[e], d0: p.d0[e], grain: None, section: &section }).collect();
             let geoms: Vec<ElementGeometry> = elements.iter().map(|el| el.geometry(&rule)).collect::<Result<_, _>>().map_err(|e| e.to_string())?;
             let mut times = [Vec::new(), Vec::new()];
+            // The assembler's call: `response_into` with one tangent matrix reused element after
+            // element (KERNEL_BOXED=1: `response_with`, which allocates a boxed tangent per call).
+            let boxed = std::env::var_os("KERNEL_BOXED").is_some();
+            let mut k = plyshell::element::ElemMat::zeros();
             for with_tangent in [true, false] {
                 for pass in 0..repeats + 1 {
                     let t = thread_seconds();
                     let mut energy = 0.0;
                     for e in 0..n * n {
-                        energy += elements[e].response_with(&rule, &geoms[e], &p.u[e], &p.frames[e], with_tangent).map_err(|e| e.to_string())?.energy;
+                        energy += if boxed {
+                            elements[e].response_with(&rule, &geoms[e], &p.u[e], &p.frames[e], with_tangent).map_err(|e| e.to_string())?.energy
+                        } else {
+                            elements[e].response_into(&rule, &geoms[e], &p.u[e], &p.frames[e], with_tangent.then_some(&mut k)).map_err(|e| e.to_string())?.1
+                        };
                     }
                     let us = (thread_seconds() - t) * 1e6 / (n * n) as f64;
                     if pass > 0 {
@@ -154,7 +163,14 @@ fn kernel(n: usize, repeats: usize) -> Result<(), String> {
                         (0..n * n)
                             .into_par_iter()
                             .with_min_len(64)
-                            .map(|e| elements[e].response_with(&rule, &geoms[e], &p.u[e], &p.frames[e], with_tangent).map(|o| o.energy).map_err(|e| e.to_string()))
+                            .map_init(plyshell::element::ElemMat::zeros, |k, e| {
+                                if boxed {
+                                    elements[e].response_with(&rule, &geoms[e], &p.u[e], &p.frames[e], with_tangent).map(|o| o.energy)
+                                } else {
+                                    elements[e].response_into(&rule, &geoms[e], &p.u[e], &p.frames[e], with_tangent.then_some(k)).map(|o| o.1)
+                                }
+                                .map_err(|e| e.to_string())
+                            })
                             .sum()
                     });
                     let us = t.elapsed().as_secs_f64() * 1e6 / (n * n) as f64;

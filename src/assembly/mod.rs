@@ -39,6 +39,9 @@ const MIN_TASK: usize = 32;
 const SERIAL_CHUNK: usize = 128;
 /// Fewest elements with tied DOFs a rayon task takes.
 const MIN_SERIAL_TASK: usize = 4;
+/// Integration points of the small stack buffer of an element's extrapolated mixed stresses
+/// (four in-plane points times up to four thickness points).
+const SMALL_MIXED_POINTS: usize = 16;
 
 /// Upper-triangular CSC pattern of the free-DOF tangent.
 #[derive(Clone, Debug)]
@@ -433,12 +436,24 @@ impl Assembler {
                 // SAFETY: element e's records and configuration are touched by this call only
                 // (see `MixedAccess`), and lie inside the store's arrays.
                 let (records, at) = unsafe { (std::slice::from_raw_parts_mut(m.records.add(lo), hi - lo), &mut *m.at.add(e)) };
-                let mut geo = [Voigt5::zeros(); MAX_MIXED_POINTS];
-                let geo = at.as_ref().map(|(u0, f0)| {
-                    extrapolate(rule, geom, u0, f0, &unknown_change(u0, f0, &x, &frames), records, &mut geo[..hi - lo])?;
-                    Ok(&geo[..hi - lo])
-                });
-                let geo = geo.transpose().map_err(fail)?;
+                // The extrapolated stresses, on a stack buffer of the element's size class:
+                // 16 points hold every Gauss rule of up to four thickness points (zeroing the
+                // 64-point buffer for them wrote 2.5 KB per element).
+                let (mut small, mut large);
+                let buf: &mut [Voigt5] = if hi - lo <= SMALL_MIXED_POINTS {
+                    small = [Voigt5::zeros(); SMALL_MIXED_POINTS];
+                    &mut small[..hi - lo]
+                } else {
+                    large = [Voigt5::zeros(); MAX_MIXED_POINTS];
+                    &mut large[..hi - lo]
+                };
+                let geo = match at.as_ref() {
+                    Some((u0, f0)) => {
+                        extrapolate(rule, geom, u0, f0, &unknown_change(u0, f0, &x, &frames), records, buf).map_err(fail)?;
+                        Some(&*buf)
+                    }
+                    None => None,
+                };
                 let out = element.response_mixed(rule, geom, &x, &frames, k.as_deref_mut(), Some(Mixed { geo, record: records }));
                 *at = out.is_ok().then_some((x, frames));
                 out

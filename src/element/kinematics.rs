@@ -50,30 +50,44 @@ const ARC_SERIES: [[f64; 3]; 15] = {
 /// geodesic is undefined. Series of asin(s)/s = Σ C(2n,n)/(4ⁿ(2n+1)) s²ⁿ for small s
 /// (Abramowitz & Stegun 4.4.40), closed form otherwise.
 pub(crate) fn arc_factor(w: f64) -> Option<[f64; 3]> {
-    let y = 0.25 * w;
-    if !(y < 0.999_999) || y < 0.0 {
-        return None;
-    }
-    let (h, hy, hyy) = if y < 0.02 {
-        let (mut h, mut h1, mut h2) = (1.0, 0.0, 0.0);
-        let mut y_nm1 = 1.0; // y^{n−1}
-        let mut y_nm2 = 0.0; // y^{n−2} (no term for n = 1)
-        for [c, nc, nnc] in ARC_SERIES {
-            h += c * y_nm1 * y;
-            h1 += nc * y_nm1;
-            h2 += nnc * y_nm2;
-            y_nm2 = y_nm1;
-            y_nm1 *= y;
+    arc_factors([w])[0]
+}
+
+/// [`arc_factor`] of L values at once. The series runs in L independent lanes (the element's
+/// four edges: one dependency chain of fifteen steps instead of four after each other), each
+/// lane with the operations of the scalar series in the same order, so every lane's result is
+/// the scalar one bit for bit; lanes past the series' range take the closed form.
+#[inline(always)]
+pub(crate) fn arc_factors<const L: usize>(w: [f64; L]) -> [Option<[f64; 3]>; L] {
+    let y = w.map(|w| 0.25 * w);
+    let (mut h, mut h1, mut h2) = ([1.0; L], [0.0; L], [0.0; L]);
+    let mut y_nm1 = [1.0; L]; // y^{n−1}
+    let mut y_nm2 = [0.0; L]; // y^{n−2} (no term for n = 1)
+    for [c, nc, nnc] in ARC_SERIES {
+        for l in 0..L {
+            h[l] += c * y_nm1[l] * y[l];
+            h1[l] += nc * y_nm1[l];
+            h2[l] += nnc * y_nm2[l];
+            y_nm2[l] = y_nm1[l];
+            y_nm1[l] *= y[l];
         }
-        (h, h1, h2)
-    } else {
-        let s = y.sqrt();
-        let r = (1.0 - y).sqrt();
-        let a = s.asin();
-        (a / s, 0.5 / (y * r) - 0.5 * a / (y * s), -0.75 / (y * y * r) + 0.25 / (y * r * r * r) + 0.75 * a / (y * y * s))
-    };
-    // d/dw = ¼ d/dy.
-    Some([h, 0.25 * hy, 0.0625 * hyy])
+    }
+    std::array::from_fn(|l| {
+        let y = y[l];
+        if !(y < 0.999_999) || y < 0.0 {
+            return None;
+        }
+        let (h, hy, hyy) = if y < 0.02 {
+            (h[l], h1[l], h2[l])
+        } else {
+            let s = y.sqrt();
+            let r = (1.0 - y).sqrt();
+            let a = s.asin();
+            (a / s, 0.5 / (y * r) - 0.5 * a / (y * s), -0.75 / (y * y * r) + 0.25 / (y * r * r * r) + 0.75 * a / (y * y * s))
+        };
+        // d/dw = ¼ d/dy.
+        Some([h, 0.25 * hy, 0.0625 * hyy])
+    })
 }
 
 /// Geodesic edge gradient E = φ(|v|²) v of the director difference v = d_b − d_a: the
@@ -191,13 +205,15 @@ impl Kinematics {
             dv[a] = u[a];
             dv[VD + a] = frames[a].d - r[VD + a];
         }
-        let mut v = [Vector3::zeros(); 4];
+        let v: [Vector3<f64>; 4] = std::array::from_fn(|k| frames[EDGES[k].1].d - frames[EDGES[k].0].d);
+        // The four edges' arc factors at once (`arc_factors`; each as `edge_gradient`'s).
+        let w = v.map(|v| v.norm_squared());
+        let factors = arc_factors(w);
         let mut jac = [Matrix3::identity(); 4];
         let mut dphi = [[0.0; 2]; 4];
         for (k, &(a, b)) in EDGES.iter().enumerate() {
             let v0 = r[VD + b] - r[VD + a];
-            v[k] = frames[b].d - frames[a].d;
-            let (phi, d1, d2) = edge_gradient(&v[k])?;
+            let [phi, d1, d2] = factors[k].ok_or(ElementFailure::DirectorSpread { chord: w[k].sqrt() })?;
             // E − E⁰ = φ (v − v⁰) + (φ − φ⁰) v⁰, free of cancellation for small changes.
             dv[VE + k] = (dv[VD + b] - dv[VD + a]) * phi + v0 * (phi - phi0[k]);
             jac[k] = Matrix3::identity() * phi + v[k] * v[k].transpose() * (2.0 * d1);
@@ -252,6 +268,49 @@ impl Kinematics {
                 out[5 * a + 4] += c * ta[1];
                 out[5 * b + 3] += c * tb[0];
                 out[5 * b + 4] += c * tb[1];
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The lane-wise arc factors equal, bit for bit, the one-value series and closed form
+    /// (the former scalar `arc_factor`), lane by lane, whatever the other lanes hold: series
+    /// and closed-form lanes side by side, and the refused values (nearly antipodal
+    /// directors, NaN).
+    #[test]
+    fn arc_factor_lanes_equal_the_scalar_evaluation() {
+        let scalar = |w: f64| -> Option<[f64; 3]> {
+            let y = 0.25 * w;
+            if !(y < 0.999_999) || y < 0.0 {
+                return None;
+            }
+            let (h, hy, hyy) = if y < 0.02 {
+                let (mut h, mut h1, mut h2, mut y_nm1, mut y_nm2) = (1.0, 0.0, 0.0, 1.0, 0.0);
+                for [c, nc, nnc] in ARC_SERIES {
+                    h += c * y_nm1 * y;
+                    h1 += nc * y_nm1;
+                    h2 += nnc * y_nm2;
+                    y_nm2 = y_nm1;
+                    y_nm1 *= y;
+                }
+                (h, h1, h2)
+            } else {
+                let (s, r) = (y.sqrt(), (1.0 - y).sqrt());
+                let a = s.asin();
+                (a / s, 0.5 / (y * r) - 0.5 * a / (y * s), -0.75 / (y * y * r) + 0.25 / (y * r * r * r) + 0.75 * a / (y * y * s))
+            };
+            Some([h, 0.25 * hy, 0.0625 * hyy])
+        };
+        let bits = |f: Option<[f64; 3]>| f.map(|v| v.map(f64::to_bits));
+        for w in [[1e-9, 0.05, 0.0799, 3.9], [0.0801, 4.0, f64::NAN, 2.0], [0.0, 1e-3, 0.5, 0.079_999]] {
+            let lanes = arc_factors(w);
+            for (l, &wl) in w.iter().enumerate() {
+                assert_eq!(bits(lanes[l]), bits(scalar(wl)), "w = {wl}");
+                assert_eq!(bits(arc_factor(wl)), bits(scalar(wl)), "w = {wl}");
             }
         }
     }

@@ -292,18 +292,28 @@ impl<'a> ShellElement<'a> {
         k: Option<&mut ElemMat>,
         mixed: Option<Mixed<'_>>,
     ) -> Result<(ElemVec, f64), ElementFailure> {
+        // Compiled apart with and without the tangent (`TANGENT`), so that the residual-only
+        // path carries none of the tangent's scratch (about 12 KB zeroed per element).
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx2") {
             // SAFETY: the CPU supports AVX2, the only requirement of `response_avx2`.
-            return unsafe { self.response_avx2(rule, geom, u, frames, k, mixed) };
+            return unsafe {
+                match k {
+                    Some(k) => self.response_avx2::<true>(rule, geom, u, frames, Some(k), mixed),
+                    None => self.response_avx2::<false>(rule, geom, u, frames, None, mixed),
+                }
+            };
         }
-        self.response_kernel(rule, geom, u, frames, k, mixed)
+        match k {
+            Some(k) => self.response_kernel::<true>(rule, geom, u, frames, Some(k), mixed),
+            None => self.response_kernel::<false>(rule, geom, u, frames, None, mixed),
+        }
     }
 
     /// `response_kernel` compiled for AVX2.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    fn response_avx2(
+    fn response_avx2<const TANGENT: bool>(
         &self,
         rule: &SectionRule,
         geom: &ElementGeometry,
@@ -312,12 +322,13 @@ impl<'a> ShellElement<'a> {
         k: Option<&mut ElemMat>,
         mixed: Option<Mixed<'_>>,
     ) -> Result<(ElemVec, f64), ElementFailure> {
-        self.response_kernel(rule, geom, u, frames, k, mixed)
+        self.response_kernel::<TANGENT>(rule, geom, u, frames, k, mixed)
     }
 
-    /// The body of `response_into`.
+    /// The body of `response_into`; `TANGENT` is whether `k` is given (the tangent is written
+    /// into `k` only with `TANGENT`).
     #[inline(always)]
-    fn response_kernel(
+    fn response_kernel<const TANGENT: bool>(
         &self,
         rule: &SectionRule,
         geom: &ElementGeometry,
@@ -331,7 +342,7 @@ impl<'a> ShellElement<'a> {
         }
         let kin = Kinematics::new(&geom.r, &geom.phi0, u, frames)?;
         let material = &*self.section.material;
-        let with_tangent = k.is_some();
+        let with_tangent = TANGENT;
         // Changes Δp of the rule's forms.
         // (Stack scratch, or heap scratch for the long rules of many-ply laminates.)
         let mut df_stack = [Vector3::zeros(); MAX_FORMS];
@@ -557,7 +568,7 @@ impl<'a> ShellElement<'a> {
             force[5 * a + 3] = feff[a].dot(&frames[a].t1);
             force[5 * a + 4] = feff[a].dot(&frames[a].t2);
         }
-        if let Some(k) = k.as_deref_mut() {
+        if let (true, Some(k)) = (TANGENT, k.as_deref_mut()) {
             mirror_into(&upper, k);
             let d = frames.map(|f| f.d);
             if geo.is_some() {
