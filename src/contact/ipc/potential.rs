@@ -26,7 +26,6 @@ use nalgebra::{Matrix3, Vector3};
 
 use super::distance;
 use super::primitives::{mollifier, Feature};
-use crate::element::NODE_DOFS;
 
 /// Multiply-rotate hash for small integer keys (the Fx hash of the Rust compiler): node
 /// numbers need no protection against collisions chosen by an adversary.
@@ -146,7 +145,7 @@ impl Derivative {
     }
 
     /// The block (i, j) for any order of i, j.
-    fn block(&self, i: usize, j: usize) -> Matrix3<f64> {
+    pub(super) fn block(&self, i: usize, j: usize) -> Matrix3<f64> {
         if i <= j {
             self.h[i][j]
         } else {
@@ -291,69 +290,6 @@ pub(super) fn mollified_derivative(nodes: &[usize; 4], key: &FeatureKey, s: &Sca
         }
     }
     out
-}
-
-/// The tangent blocks of the contact terms: −∇²E per node (`diag`) and per node pair a < b
-/// (`off`, the block of row a, column b).
-#[derive(Default)]
-pub(super) struct Blocks {
-    pub(super) diag: FxMap<usize, Matrix3<f64>>,
-    pub(super) off: FxMap<(usize, usize), Matrix3<f64>>,
-}
-
-impl Blocks {
-    /// Adds −(the 3×3 block of slots i, j) to the tangent blocks of nodes a = nodes[i],
-    /// b = nodes[j], visiting each unordered slot pair once (a ≤ b).
-    fn add(&mut self, nodes: &[usize], block: impl Fn(usize, usize) -> Matrix3<f64>) {
-        for (i, &a) in nodes.iter().enumerate() {
-            for (j, &b) in nodes.iter().enumerate() {
-                if a > b || (a == b && i != j) {
-                    continue;
-                }
-                let m = block(i, j);
-                if a == b {
-                    *self.diag.entry(a).or_insert_with(Matrix3::zeros) -= m;
-                } else {
-                    *self.off.entry((a, b)).or_insert_with(Matrix3::zeros) -= m;
-                }
-            }
-        }
-    }
-
-    /// Forces −∇E into `f_ext` and blocks −∇²E (the diagonal ones symmetrised) of a
-    /// [`Derivative`].
-    pub(super) fn add_derivative(&mut self, d: &Derivative, f_ext: &mut [f64], hessian: bool) {
-        let nodes = &d.nodes[..d.m];
-        for (k, &a) in nodes.iter().enumerate() {
-            for c in 0..3 {
-                f_ext[NODE_DOFS * a + c] -= d.g[k][c];
-            }
-        }
-        if hessian {
-            self.add(nodes, |i, j| if i == j { (d.h[i][i] + d.h[i][i].transpose()) * 0.5 } else { d.block(i, j) });
-        }
-    }
-
-    /// Forces and blocks of a potential of r = Σ_k w_k x_k (friction): gradient w_k g and
-    /// Hessian blocks w_i w_j K; slots with w_k = 0 contribute nothing and are skipped.
-    pub(super) fn add_weighted(&mut self, nodes: &[usize; 4], weights: &[f64; 4], g: &Vector3<f64>, k: Option<&Matrix3<f64>>, f_ext: &mut [f64]) {
-        // The used slots and their nodes in fixed arrays (no allocation per pair).
-        let (mut slots, mut sub, mut n) = ([0usize; 4], [0usize; 4], 0);
-        for s in 0..4 {
-            if weights[s] != 0.0 {
-                (slots[n], sub[n]) = (s, nodes[s]);
-                n += 1;
-            }
-        }
-        let used = &slots[..n];
-        for &s in used {
-            for c in 0..3 {
-                f_ext[NODE_DOFS * nodes[s] + c] -= weights[s] * g[c];
-            }
-        }
-        let Some(k) = k else { return };
-        self.add(&sub[..n], |i, j| k * (weights[used[i]] * weights[used[j]]));
-    }
 }
 
 #[cfg(test)]

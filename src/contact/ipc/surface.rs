@@ -55,7 +55,8 @@ use rayon::prelude::*;
 
 use super::broad_phase::{Sweep, Trees};
 use super::friction::{Friction, FrictionTerm};
-use super::potential::{derivative_into, group, Blocks, Derivative, FeatureKey, FxMap, Scalar};
+use super::blocks::Blocks;
+use super::potential::{derivative_into, group, Derivative, FeatureKey, FxMap, Scalar};
 pub use super::report::{SurfaceIncrement, SurfaceTimings};
 pub use super::settings::{SurfaceSettings, SurfaceSetup};
 use crate::element::NODE_DOFS;
@@ -229,6 +230,8 @@ pub struct SurfaceContact {
     /// holds the exact (not projected) ones of the terms `last`.
     derivatives: Vec<Derivative>,
     derivatives_exact: bool,
+    /// The tangent blocks, summed in the layout of the last evaluation's blocks.
+    blocks: Blocks,
     /// The last sweep's gaps at its start (see [`StartGaps`]).
     start: Mutex<Option<StartGaps>>,
     /// Absolute part of the [`StartGaps`] margin: 10⁻⁵ of four times the longest reference
@@ -371,6 +374,7 @@ impl SurfaceContact {
             trial: None,
             derivatives: Vec::new(),
             derivatives_exact: false,
+            blocks: Blocks::default(),
             start: Mutex::new(None),
             bound_margin,
             point_index,
@@ -459,7 +463,7 @@ impl NodalForces for SurfaceContact {
         };
         self.search_s += t.elapsed().as_secs_f64();
         let mut pot = 0.0;
-        let mut blocks = Blocks::default();
+        let mut blocks = std::mem::take(&mut self.blocks);
         for term in &terms {
             if !term.energy.is_finite() {
                 // Through the offset surface: inadmissible (the line search backs off).
@@ -477,7 +481,7 @@ impl NodalForces for SurfaceContact {
         let finite = pot.is_finite();
         let project = self.project;
         // The per-feature derivatives and their blocks (the grouping is a serial sort, the
-        // blocks go into one map in order) alongside what the terms still lack (parallel),
+        // blocks are summed in order ([`Blocks`])) alongside what the terms still lack (parallel),
         // so that the serial parts do not leave a thread idle; the same values, summed in
         // the same order, as one after the other.
         let (_, (mollified, fr, pending_s)) = rayon::join(
@@ -527,10 +531,12 @@ impl NodalForces for SurfaceContact {
             pot += ft.energy;
             blocks.add_weighted(&ft.nodes, &ft.weights, &ft.g, ft.k.as_ref(), f_ext);
         }
-        jacobian.extend(blocks.diag);
+        let (diag, off) = blocks.take();
+        self.blocks = blocks;
+        jacobian.extend(diag);
         // The solver adds the symmetric part −½(J + Jᵀ) of a pushed block J at (a, b) and
         // (b, a): pushing 2J once for a < b gives J at (a, b) and Jᵀ at (b, a).
-        pairs.extend(blocks.off.into_iter().map(|((a, b), j)| (a, b, j * 2.0)));
+        pairs.extend(off.into_iter().map(|(a, b, j)| (a, b, j * 2.0)));
         self.last = terms;
         self.last_friction = fr;
         self.last_u = self.points.iter().map(|&a| state.u[a]).collect();
