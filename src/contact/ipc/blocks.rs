@@ -10,14 +10,23 @@
 //! hash map, and the layout becomes this evaluation's set for the next one. Each block sums
 //! its contributions in the order they come, from zero, as the hash map did (the same values
 //! bit for bit); the blocks are handed on in (row, column) order.
+//!
+//! The rows are split into as many ranges as there are threads, balanced by the layout's
+//! blocks, and each range goes through every contribution in order, keeping the blocks (and
+//! the forces) of its own rows: each block and force still sums the same contributions in
+//! the same order.
+
+use std::ops::Range;
 
 use nalgebra::{Matrix3, Vector3};
+use rayon::prelude::*;
 
 use super::potential::{Derivative, FxMap};
 use crate::element::NODE_DOFS;
 
 /// The tangent blocks of the contact terms: −∇²E per node (row a = column b) and per node
-/// pair a < b (the block of row a, column b), summed over one evaluation ([`Blocks::take`]).
+/// pair a < b (the block of row a, column b), summed over one evaluation
+/// ([`Blocks::sum_in_parts`], then [`Blocks::take`]).
 #[derive(Default)]
 pub(super) struct Blocks {
     /// The layout (the last evaluation's blocks): row a's columns are
@@ -27,18 +36,33 @@ pub(super) struct Blocks {
     /// This evaluation's sum of each layout block, valid where `touched`.
     sums: Vec<Matrix3<f64>>,
     touched: Vec<bool>,
-    /// This evaluation's blocks outside the layout.
-    extra: FxMap<(usize, usize), Matrix3<f64>>,
+    /// This evaluation's blocks outside the layout, per part of the rows.
+    extra: Vec<FxMap<(usize, usize), Matrix3<f64>>>,
 }
 
-impl Blocks {
-    /// The sum of block (a, b), a ≤ b: zero when first met in this evaluation.
+/// The blocks and forces of the rows (nodes) `rows`, summed by one thread.
+pub(super) struct Part<'a> {
+    rows: Range<usize>,
+    row_ptr: &'a [usize],
+    cols: &'a [usize],
+    /// Layout index of `sums[0]`.
+    first: usize,
+    sums: &'a mut [Matrix3<f64>],
+    touched: &'a mut [bool],
+    extra: &'a mut FxMap<(usize, usize), Matrix3<f64>>,
+    /// The forces of `rows` (`f[NODE_DOFS * (a − rows.start) + c]`).
+    f: &'a mut [f64],
+}
+
+impl Part<'_> {
+    /// The sum of block (a, b), a ≤ b, a in this part's rows: zero when first met in this
+    /// evaluation.
     #[inline]
     fn sum(&mut self, a: usize, b: usize) -> &mut Matrix3<f64> {
         if a + 1 < self.row_ptr.len() {
             let (start, end) = (self.row_ptr[a], self.row_ptr[a + 1]);
             if let Some(k) = self.cols[start..end].iter().position(|&c| c == b) {
-                let i = start + k;
+                let i = start + k - self.first;
                 if !self.touched[i] {
                     self.touched[i] = true;
                     self.sums[i] = Matrix3::zeros();
@@ -50,9 +74,13 @@ impl Blocks {
     }
 
     /// Adds −(the 3×3 block of slots i, j) to the tangent blocks of nodes a = nodes[i],
-    /// b = nodes[j], visiting each unordered slot pair once (a ≤ b).
+    /// b = nodes[j] of this part's rows, visiting each unordered slot pair once (a ≤ b).
+    #[inline]
     fn add(&mut self, nodes: &[usize], block: impl Fn(usize, usize) -> Matrix3<f64>) {
         for (i, &a) in nodes.iter().enumerate() {
+            if !self.rows.contains(&a) {
+                continue;
+            }
             for (j, &b) in nodes.iter().enumerate() {
                 if a > b || (a == b && i != j) {
                     continue;
@@ -63,23 +91,29 @@ impl Blocks {
         }
     }
 
-    /// Forces −∇E into `f_ext` and blocks −∇²E (the diagonal ones symmetrised) of a
-    /// [`Derivative`].
-    pub(super) fn add_derivative(&mut self, d: &Derivative, f_ext: &mut [f64], hessian: bool) {
-        let nodes = &d.nodes[..d.m];
-        for (k, &a) in nodes.iter().enumerate() {
+    /// Subtracts `g` from the forces of node `a` when it is one of this part's rows.
+    #[inline]
+    fn force(&mut self, a: usize, g: impl Fn(usize) -> f64) {
+        if self.rows.contains(&a) {
+            let r = NODE_DOFS * (a - self.rows.start);
             for c in 0..3 {
-                f_ext[NODE_DOFS * a + c] -= d.g[k][c];
+                self.f[r + c] -= g(c);
             }
         }
-        if hessian {
-            self.add(nodes, |i, j| if i == j { (d.h[i][i] + d.h[i][i].transpose()) * 0.5 } else { d.block(i, j) });
+    }
+
+    /// Forces −∇E and blocks −∇²E (the diagonal ones symmetrised) of a [`Derivative`].
+    pub(super) fn add_derivative(&mut self, d: &Derivative) {
+        let nodes = &d.nodes[..d.m];
+        for (k, &a) in nodes.iter().enumerate() {
+            self.force(a, |c| d.g[k][c]);
         }
+        self.add(nodes, |i, j| if i == j { (d.h[i][i] + d.h[i][i].transpose()) * 0.5 } else { d.block(i, j) });
     }
 
     /// Forces and blocks of a potential of r = Σ_k w_k x_k (friction): gradient w_k g and
     /// Hessian blocks w_i w_j K; slots with w_k = 0 contribute nothing and are skipped.
-    pub(super) fn add_weighted(&mut self, nodes: &[usize; 4], weights: &[f64; 4], g: &Vector3<f64>, k: Option<&Matrix3<f64>>, f_ext: &mut [f64]) {
+    pub(super) fn add_weighted(&mut self, nodes: &[usize; 4], weights: &[f64; 4], g: &Vector3<f64>, k: Option<&Matrix3<f64>>) {
         // The used slots and their nodes in fixed arrays (no allocation per pair).
         let (mut slots, mut sub, mut n) = ([0usize; 4], [0usize; 4], 0);
         for s in 0..4 {
@@ -90,27 +124,75 @@ impl Blocks {
         }
         let used = &slots[..n];
         for &s in used {
-            for c in 0..3 {
-                f_ext[NODE_DOFS * nodes[s] + c] -= weights[s] * g[c];
-            }
+            self.force(nodes[s], |c| weights[s] * g[c]);
         }
         let Some(k) = k else { return };
         self.add(&sub[..n], |i, j| k * (weights[used[i]] * weights[used[j]]));
     }
+}
 
-    /// This evaluation's blocks in (row, column) order — the node blocks (a, −∇²E_aa) and the
-    /// node-pair blocks (a, b, −∇²E_ab), a < b — and a fresh start for the next evaluation,
-    /// whose layout they become.
-    pub(super) fn take(&mut self) -> (Vec<(usize, Matrix3<f64>)>, Vec<(usize, usize, Matrix3<f64>)>) {
-        let mut extra: Vec<((usize, usize), Matrix3<f64>)> = self.extra.drain().collect();
+impl Blocks {
+    /// Sums this evaluation's contributions: `add` is called once per part of the rows
+    /// (`parts` of them, in parallel), each call making every contribution in order; each
+    /// part keeps the blocks and the forces (into `f_ext`, all nodes' DOFs) of its rows.
+    pub(super) fn sum_in_parts(&mut self, f_ext: &mut [f64], parts: usize, add: impl Fn(&mut Part) + Sync) {
+        let nodes = f_ext.len() / NODE_DOFS;
+        let parts = parts.clamp(1, nodes.max(1));
+        // Row boundaries: equal shares of the layout's blocks, else of the nodes.
+        let laid = self.row_ptr.len().saturating_sub(1).min(nodes);
+        let mut bounds = vec![0usize; parts + 1];
+        for p in 1..parts {
+            bounds[p] = if self.cols.is_empty() {
+                p * nodes / parts
+            } else {
+                let target = p * self.cols.len() / parts;
+                self.row_ptr[..=laid].partition_point(|&r| r < target).min(laid)
+            }
+            .max(bounds[p - 1]);
+        }
+        bounds[parts] = nodes;
+        self.extra.resize_with(parts, FxMap::default);
+        let (row_ptr, cols) = (&self.row_ptr, &self.cols);
+        let at = |a: usize| if a < row_ptr.len() { row_ptr[a] } else { cols.len() };
+        let mut out: Vec<Part> = Vec::with_capacity(parts);
+        let (mut sums, mut touched, mut f) = (&mut self.sums[..], &mut self.touched[..], &mut f_ext[..]);
+        for (p, extra) in self.extra.iter_mut().enumerate() {
+            let rows = bounds[p]..bounds[p + 1];
+            let (first, last) = (at(rows.start), at(rows.end));
+            let (s, rest_s) = std::mem::take(&mut sums).split_at_mut(last - first);
+            let (t, rest_t) = std::mem::take(&mut touched).split_at_mut(last - first);
+            let len_f = if p + 1 == parts { f.len() } else { NODE_DOFS * rows.len() };
+            let (fp, rest_f) = std::mem::take(&mut f).split_at_mut(len_f);
+            (sums, touched, f) = (rest_s, rest_t, rest_f);
+            out.push(Part { rows, row_ptr, cols, first, sums: s, touched: t, extra, f: fp });
+        }
+        if parts == 1 {
+            out.iter_mut().for_each(|p| add(p));
+        } else {
+            out.par_iter_mut().for_each(|p| add(p));
+        }
+    }
+
+    /// Hands on this evaluation's blocks in (row, column) order — each node block to
+    /// `node(a, −∇²E_aa)`, each node-pair block to `pair(a, b, −∇²E_ab)`, a < b — and makes
+    /// them the layout of the next evaluation.
+    pub(super) fn take(&mut self, mut node: impl FnMut(usize, Matrix3<f64>), mut pair: impl FnMut(usize, usize, Matrix3<f64>)) {
+        let mut extra: Vec<((usize, usize), Matrix3<f64>)> = self.extra.iter_mut().flat_map(|e| e.drain()).collect();
         extra.sort_unstable_by_key(|e| e.0);
         let unchanged = extra.is_empty() && self.touched.iter().all(|&t| t);
-        let (mut diag, mut off) = (Vec::new(), Vec::with_capacity(self.cols.len() + extra.len()));
-        let mut push = |(a, b): (usize, usize), m: Matrix3<f64>| {
+        // The next layout, built as the blocks go out (in order) unless it is this one.
+        let (mut row_ptr, mut cols) = (Vec::new(), Vec::new());
+        let mut emit = |(a, b): (usize, usize), m: Matrix3<f64>| {
+            if !unchanged {
+                while row_ptr.len() <= a {
+                    row_ptr.push(cols.len());
+                }
+                cols.push(b);
+            }
             if a == b {
-                diag.push((a, m));
+                node(a, m);
             } else {
-                off.push((a, b, m));
+                pair(a, b, m);
             }
         };
         // The layout's touched blocks and the extra ones, merged in (row, column) order.
@@ -122,38 +204,24 @@ impl Blocks {
                 }
                 let key = (a, self.cols[i]);
                 while let Some(e) = next.next_if(|e| e.0 < key) {
-                    push(e.0, e.1);
+                    emit(e.0, e.1);
                 }
-                push(key, self.sums[i]);
+                emit(key, self.sums[i]);
             }
         }
         for e in next {
-            push(e.0, e.1);
+            emit(e.0, e.1);
         }
-        if unchanged {
-            self.touched.iter_mut().for_each(|t| *t = false);
-        } else {
-            let rows = diag.iter().map(|d| d.0 + 1).chain(off.iter().map(|o| o.0 + 1)).max().unwrap_or(0);
-            let mut count = vec![0usize; rows + 1];
-            for a in diag.iter().map(|d| d.0).chain(off.iter().map(|o| o.0)) {
-                count[a + 1] += 1;
-            }
-            for a in 0..rows {
-                count[a + 1] += count[a];
-            }
-            // Both lists are in (row, column) order; a row's node block comes first.
-            let mut cols = vec![0usize; count[rows]];
-            let mut fill = count.clone();
-            for (a, b) in diag.iter().map(|d| (d.0, d.0)).chain(off.iter().map(|o| (o.0, o.1))) {
-                cols[fill[a]] = b;
-                fill[a] += 1;
-            }
-            self.row_ptr = count;
-            self.sums = vec![Matrix3::zeros(); cols.len()];
-            self.touched = vec![false; cols.len()];
+        if !unchanged {
+            row_ptr.push(cols.len());
+            self.row_ptr = row_ptr;
             self.cols = cols;
+            // Sums are written before they are read (`touched`): no need to clear them.
+            self.sums.resize(self.cols.len(), Matrix3::zeros());
+            self.touched.clear();
         }
-        (diag, off)
+        self.touched.resize(self.cols.len(), false);
+        self.touched.iter_mut().for_each(|t| *t = false);
     }
 }
 
@@ -161,9 +229,10 @@ impl Blocks {
 mod tests {
     use super::*;
 
-    /// Over evaluations whose blocks come and go, [`Blocks::take`] gives each evaluation's
-    /// blocks, in (row, column) order, with the sums — bit for bit — of a hash map summing
-    /// the same contributions in the same order from zero, and the same forces.
+    /// Over evaluations whose blocks come and go, summed in one, two or three parts of the
+    /// rows, [`Blocks::take`] gives each evaluation's blocks in (row, column) order with the
+    /// sums — bit for bit — of a hash map summing the same contributions in the same order
+    /// from zero, and the same forces.
     #[test]
     fn blocks_match_a_fresh_hash_map_over_changing_sets() {
         let mut seed = 987654321u64;
@@ -174,14 +243,13 @@ mod tests {
             seed
         };
         let mut blocks = Blocks::default();
-        for round in 0..12 {
-            // Contributions on nodes 0..span: the node range moves and shrinks and grows.
-            let span = [40usize, 40, 40, 60, 20, 20, 80, 80, 5, 40, 40, 1][round];
-            let base = [0usize, 0, 3, 0, 10, 10, 0, 0, 2, 0, 0, 7][round];
-            let mut reference: FxMap<(usize, usize), Matrix3<f64>> = FxMap::default();
-            let n_dofs = NODE_DOFS * (base + span + 1);
-            let (mut f, mut f_ref) = (vec![0.0; n_dofs], vec![0.0; n_dofs]);
-            for _ in 0..300 {
+        let nodes = 90;
+        for round in 0..14 {
+            // Contributions on nodes base..base + span: the range moves, shrinks and grows.
+            let span = [40usize, 40, 40, 60, 20, 20, 80, 80, 5, 40, 40, 4, 89, 4][round];
+            let base = [0usize, 0, 3, 0, 10, 10, 0, 0, 2, 0, 0, 7, 0, 86][round];
+            let mut list = Vec::new();
+            while list.len() < 300 {
                 let m = 2 + (next() % 3) as usize;
                 let mut d = Derivative::zero();
                 d.m = m;
@@ -192,15 +260,18 @@ mod tests {
                         d.h[k][l] = Matrix3::from_fn(|_, _| (next() % 1000) as f64 * 1.3e-3 - 0.61);
                     }
                 }
-                // A feature's nodes are distinct; a friction pair may repeat none either.
+                // A feature's nodes are distinct.
                 let mut seen = d.nodes[..m].to_vec();
                 seen.sort_unstable();
                 seen.dedup();
-                if seen.len() < m {
-                    continue;
+                if seen.len() == m {
+                    list.push(d);
                 }
-                blocks.add_derivative(&d, &mut f, true);
-                let nodes = &d.nodes[..m];
+            }
+            let mut reference: FxMap<(usize, usize), Matrix3<f64>> = FxMap::default();
+            let (mut f, mut f_ref) = (vec![0.0; NODE_DOFS * nodes], vec![0.0; NODE_DOFS * nodes]);
+            for d in &list {
+                let nodes = &d.nodes[..d.m];
                 for (k, &a) in nodes.iter().enumerate() {
                     for c in 0..3 {
                         f_ref[NODE_DOFS * a + c] -= d.g[k][c];
@@ -216,15 +287,16 @@ mod tests {
                     }
                 }
             }
-            let (diag, off) = blocks.take();
-            let got: Vec<((usize, usize), Matrix3<f64>)> = diag.iter().map(|&(a, m)| ((a, a), m)).chain(off.iter().map(|&(a, b, m)| ((a, b), m))).collect();
+            let parts = 1 + round % 3;
+            blocks.sum_in_parts(&mut f, parts, |part| list.iter().for_each(|d| part.add_derivative(d)));
+            let got = std::cell::RefCell::new(Vec::new());
+            blocks.take(|a, m| got.borrow_mut().push(((a, a), m)), |a, b, m| got.borrow_mut().push(((a, b), m)));
+            let got: Vec<((usize, usize), Matrix3<f64>)> = got.into_inner();
             let mut want: Vec<((usize, usize), Matrix3<f64>)> = reference.into_iter().collect();
             want.sort_unstable_by_key(|e| e.0);
-            let mut sorted = got.clone();
-            sorted.sort_unstable_by_key(|e| e.0);
-            assert_eq!(diag.windows(2).all(|w| w[0].0 < w[1].0) && off.windows(2).all(|w| (w[0].0, w[0].1) < (w[1].0, w[1].1)), true, "round {round}: order");
+            assert!(got.windows(2).all(|w| w[0].0 < w[1].0), "round {round}: (row, column) order");
             assert_eq!(got.len(), want.len(), "round {round}");
-            for (g, w) in sorted.iter().zip(&want) {
+            for (g, w) in got.iter().zip(&want) {
                 assert_eq!(g.0, w.0, "round {round}");
                 assert!(g.1.iter().zip(w.1.iter()).all(|(p, q)| p.to_bits() == q.to_bits()), "round {round}: block {:?}", g.0);
             }
