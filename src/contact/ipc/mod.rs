@@ -1,6 +1,7 @@
 //! Incremental-potential contact between shell surfaces: primitive distances and their
 //! closed-form derivatives, broad phase and the barrier/friction term.
 
+mod blocks;
 pub mod broad_phase;
 pub mod distance;
 mod friction;

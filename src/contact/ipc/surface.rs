@@ -55,7 +55,8 @@ use rayon::prelude::*;
 
 use super::broad_phase::{Sweep, Trees};
 use super::friction::{Friction, FrictionTerm};
-use super::potential::{derivative_into, group, Blocks, Derivative, FeatureKey, FxMap, Scalar};
+use super::blocks::Blocks;
+use super::potential::{derivative_into, group, Derivative, FeatureKey, FxMap, Scalar};
 pub use super::report::{SurfaceIncrement, SurfaceTimings};
 pub use super::settings::{SurfaceSettings, SurfaceSetup};
 use crate::element::NODE_DOFS;
@@ -229,6 +230,8 @@ pub struct SurfaceContact {
     /// holds the exact (not projected) ones of the terms `last`.
     derivatives: Vec<Derivative>,
     derivatives_exact: bool,
+    /// The tangent blocks, summed in the layout of the last evaluation's blocks.
+    blocks: Blocks,
     /// The last sweep's gaps at its start (see [`StartGaps`]).
     start: Mutex<Option<StartGaps>>,
     /// Absolute part of the [`StartGaps`] margin: 10⁻⁵ of four times the longest reference
@@ -371,6 +374,7 @@ impl SurfaceContact {
             trial: None,
             derivatives: Vec::new(),
             derivatives_exact: false,
+            blocks: Blocks::default(),
             start: Mutex::new(None),
             bound_margin,
             point_index,
@@ -459,7 +463,7 @@ impl NodalForces for SurfaceContact {
         };
         self.search_s += t.elapsed().as_secs_f64();
         let mut pot = 0.0;
-        let mut blocks = Blocks::default();
+        let mut blocks = std::mem::take(&mut self.blocks);
         for term in &terms {
             if !term.energy.is_finite() {
                 // Through the offset surface: inadmissible (the line search backs off).
@@ -476,22 +480,17 @@ impl NodalForces for SurfaceContact {
         let derive = pot.is_finite() && !(again && self.derivatives_exact);
         let finite = pot.is_finite();
         let project = self.project;
-        // The per-feature derivatives and their blocks (the grouping is a serial sort, the
-        // blocks go into one map in order) alongside what the terms still lack (parallel),
-        // so that the serial parts do not leave a thread idle; the same values, summed in
-        // the same order, as one after the other.
+        // The per-feature derivatives alongside what the terms still lack (both parallel),
+        // then their blocks and forces, summed in parts of the rows (`Blocks`), each part
+        // taking every contribution in order: the same values, summed in the same order, as
+        // one after the other.
         let (_, (mollified, fr, pending_s)) = rayon::join(
             || {
                 if derive {
                     self.barrier_derivatives(&terms, &x, &mut derivatives);
                 }
-                if finite {
-                    if project {
-                        derivatives.par_iter_mut().for_each(Derivative::project_hessian);
-                    }
-                    for d in derivatives.iter() {
-                        blocks.add_derivative(d, f_ext, true);
-                    }
+                if finite && project {
+                    derivatives.par_iter_mut().for_each(Derivative::project_hessian);
                 }
             },
             || {
@@ -508,29 +507,40 @@ impl NodalForces for SurfaceContact {
         for (i, d) in mollified {
             terms[i].mollified = Some(d);
         }
-        if finite {
-            self.derivatives_exact = !project;
-            for d in terms.iter().filter_map(|t| t.mollified.as_deref()) {
+        // The mollified pairs' derivatives, projected copies when projecting.
+        let projected: Vec<Derivative> = if finite && project {
+            terms.par_iter().filter_map(|t| t.mollified.as_deref()).map(|d| {
+                let mut d = d.clone();
+                d.project_hessian();
+                d
+            }).collect()
+        } else {
+            Vec::new()
+        };
+        self.derivatives_exact = finite && !project;
+        blocks.sum_in_parts(f_ext, rayon::current_num_threads(), |part| {
+            if finite {
+                for d in derivatives.iter() {
+                    part.add_derivative(d);
+                }
                 if project {
-                    let mut d = d.clone();
-                    d.project_hessian();
-                    blocks.add_derivative(&d, f_ext, true);
+                    projected.iter().for_each(|d| part.add_derivative(d));
                 } else {
-                    blocks.add_derivative(d, f_ext, true);
+                    terms.iter().filter_map(|t| t.mollified.as_deref()).for_each(|d| part.add_derivative(d));
                 }
             }
-        } else {
-            self.derivatives_exact = false;
-        }
+            for ft in &fr {
+                part.add_weighted(&ft.nodes, &ft.weights, &ft.g, ft.k.as_ref());
+            }
+        });
         self.derivatives = derivatives;
         for ft in &fr {
             pot += ft.energy;
-            blocks.add_weighted(&ft.nodes, &ft.weights, &ft.g, ft.k.as_ref(), f_ext);
         }
-        jacobian.extend(blocks.diag);
         // The solver adds the symmetric part −½(J + Jᵀ) of a pushed block J at (a, b) and
         // (b, a): pushing 2J once for a < b gives J at (a, b) and Jᵀ at (b, a).
-        pairs.extend(blocks.off.into_iter().map(|((a, b), j)| (a, b, j * 2.0)));
+        blocks.take(|a, j| jacobian.push((a, j)), |a, b, j| pairs.push((a, b, j * 2.0)));
+        self.blocks = blocks;
         self.last = terms;
         self.last_friction = fr;
         self.last_u = self.points.iter().map(|&a| state.u[a]).collect();
